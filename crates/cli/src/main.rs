@@ -1,0 +1,2 @@
+//! The `metaplate` command-line tool.
+fn main() {}

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs what metaplate needs beyond the Rust toolchain, on a fresh Debian machine. Called by README.md and
+# .ci/run, so the two cannot drift apart. Idempotent: re-running it installs nothing new.
+set -euo pipefail
+
+# Debian packages (none needed yet: every crate we use builds without system libraries).
+debian_packages=()
+
+# Python packages used by tests that cross-check our output with independent tools (pinned).
+python_packages=()
+
+if [ ${#debian_packages[@]} -gt 0 ]; then
+    missing=()
+    for p in "${debian_packages[@]}"; do
+        dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+    done
+    if [ ${#missing[@]} -gt 0 ]; then
+        sudo_cmd=""
+        [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+        $sudo_cmd apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
+    fi
+fi
+
+if [ ${#python_packages[@]} -gt 0 ]; then
+    python3 -m pip install --quiet --disable-pip-version-check "${python_packages[@]}"
+fi
+
+echo "install-deps: done"
