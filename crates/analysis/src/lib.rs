@@ -1,0 +1,1 @@
+//! Wave-field analysis (being written).
