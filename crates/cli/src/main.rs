@@ -4,6 +4,10 @@
 
 use clap::{Parser, Subcommand};
 
+mod scene;
+mod sweep;
+mod wav;
+
 #[derive(Parser)]
 #[command(
     name = "metaplate",
@@ -16,9 +20,17 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Write an excitation sweep (the paper's by default) as a 32-bit float WAV file.
+    Sweep(sweep::SweepArgs),
+    /// List the built-in scenes, or show one (or a scene file) fully resolved.
+    Scene(scene::SceneArgs),
+}
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    match cli.command {}
+    match cli.command {
+        Command::Sweep(args) => sweep::run(&args),
+        Command::Scene(args) => scene::run(&args),
+    }
 }

@@ -1,7 +1,8 @@
 //! Shared domain types of metaplate.
 //!
-//! This crate grows with the suite: measurement grids now; scenes, configuration and the capability traits
-//! (`Vibrometer`, `Daq`, `AudioOut`, `Clock`) as the mock-hardware and driver layers arrive. It depends on nothing
+//! Measurement grids ([`grid`]) and scenes ([`scene`]: one TOML file describing a whole simulated lab); later, the
+//! capability traits (`Vibrometer`, `Daq`, `AudioOut`, `Clock`) as the driver layers arrive. It depends on nothing
 //! else in the workspace, and everything else may depend on it.
 
 pub mod grid;
+pub mod scene;

@@ -1,0 +1,59 @@
+//! The measurement chain: vibrometer, DAQ and audio interface.
+
+use serde::{Deserialize, Serialize};
+
+/// The laser Doppler vibrometer's imperfections.
+///
+/// Valid range (checked by [`crate::scene::Scene::validate`]): finite `noise_rms_m_s >= 0`,
+/// `0 < speckle_mean_level <= 1`, `speckle_spread >= 0`, `0 <= dropout_probability <= 1`, `max_velocity_m_s > 0`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LdvSpec {
+    /// Velocity noise floor at full signal level, m/s rms over the DAQ bandwidth.
+    pub noise_rms_m_s: f64,
+    /// Mean returned signal level, as a fraction of the best possible (1 = a perfect retroreflector). The noise
+    /// grows as the level falls.
+    pub speckle_mean_level: f64,
+    /// Relative spread (standard deviation / mean) of the signal level from point to point (speckle).
+    pub speckle_spread: f64,
+    /// Probability that one recording at one point suffers a signal dropout.
+    pub dropout_probability: f64,
+    /// Full-scale velocity of the selected range, m/s; faster motion clips.
+    pub max_velocity_m_s: f64,
+}
+
+/// The data acquisition unit that records the vibrometer's analog output and the loopback reference.
+///
+/// Valid range (checked by [`crate::scene::Scene::validate`]): `1 <= bits <= 32`, finite `range_v > 0`,
+/// `sample_rate_hz > 0`, `|clock_offset_ppm| <= 1000`, `volts_per_m_s > 0`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DaqSpec {
+    /// ADC resolution, bits.
+    pub bits: u32,
+    /// Input range +/- `range_v`, V; inputs beyond it clip.
+    pub range_v: f64,
+    /// Nominal sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// How far the DAQ's clock runs fast (positive) or slow of nominal, parts per million.
+    pub clock_offset_ppm: f64,
+    /// Vibrometer output sensitivity, V per m/s.
+    pub volts_per_m_s: f64,
+}
+
+/// The multichannel audio interface that drives the actuators.
+///
+/// Valid range (checked by [`crate::scene::Scene::validate`]): finite `sample_rate_hz > 0`, `channels` at least
+/// the number of actuators plus one (the loopback reference), `latency_s >= 0`, `|clock_offset_ppm| <= 1000`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AudioSpec {
+    /// Nominal sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Output channels.
+    pub channels: u32,
+    /// Delay from handing a buffer to the driver to sound at the outputs, s.
+    pub latency_s: f64,
+    /// How far the interface's clock runs fast (positive) or slow of nominal, parts per million.
+    pub clock_offset_ppm: f64,
+}

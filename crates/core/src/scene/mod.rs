@@ -1,0 +1,211 @@
+//! Scenes: one TOML file that describes a whole (simulated) lab.
+//!
+//! A scene gives the plate (outline, material, thickness, loss), its supports, its resonator lattice, the
+//! actuators and their voice coils, the measurement grid, the vibrometer, the DAQ, the audio interface, a fault
+//! schedule and a random seed. All quantities are SI (lengths in metres, frequencies in hertz); the unit is in each
+//! key's name. Coordinates are centred on the plate's centre, x along the long axis.
+//!
+//! The built-in scenes are the paper's two plates, `metamaterial` and `homogeneous` (files in `crates/core/scenes/`).
+//! A user's file is checked key by key: an unknown key, a missing key, a value of the wrong type or outside its
+//! valid range is a [`SceneError`] naming the file, line and key path, never a panic.
+
+mod actuator;
+mod error;
+mod fault;
+mod file;
+mod instruments;
+mod locate;
+mod outline;
+mod plate;
+mod resonator;
+mod support;
+mod validate;
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+pub use actuator::{ActuatorSpec, VoiceCoilSpec};
+pub use error::SceneError;
+pub use fault::{FaultKind, FaultSpec};
+pub use instruments::{AudioSpec, DaqSpec, LdvSpec};
+pub use outline::{EDGE_TOLERANCE_M, Outline};
+pub use plate::PlateSpec;
+pub use resonator::{MAX_RESONATORS, ResonatorModel, ResonatorSpec};
+pub use support::SupportSpec;
+
+use crate::grid::GridSpec;
+use file::SceneFile;
+use locate::DocIndex;
+use validate::Problem;
+
+/// The built-in scenes: name and TOML text.
+const BUILTINS: &[(&str, &str)] = &[
+    ("metamaterial", include_str!("../../scenes/metamaterial.toml")),
+    ("homogeneous", include_str!("../../scenes/homogeneous.toml")),
+];
+
+/// The built-in names, in the order of [`BUILTINS`].
+const BUILTIN_NAMES: &[&str] = &["metamaterial", "homogeneous"];
+
+/// A whole simulated lab. See the module documentation for the file format; every field's valid range is on its
+/// type, and [`Scene::validate`] checks them all.
+///
+/// Serialises (to TOML, JSON, ...) in the file's form, the same as [`Scene::to_toml_string`]; deserialising
+/// resolves voice-coil defaults and validates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(into = "SceneFile", try_from = "SceneFile")]
+pub struct Scene {
+    /// Short name (a built-in's name, or the file's own).
+    pub name: String,
+    /// One line on what the scene is.
+    pub description: String,
+    /// Seed of every random draw the simulated lab makes (at most 2^63 - 1: TOML integers are signed).
+    pub seed: u64,
+    /// The plate.
+    pub plate: PlateSpec,
+    /// The pads the plate rests on (none: a free plate).
+    pub supports: Vec<SupportSpec>,
+    /// The resonator lattice, or none.
+    pub resonators: ResonatorSpec,
+    /// The actuators, in audio-channel order (actuator i is on output i).
+    pub actuators: Vec<ActuatorSpec>,
+    /// The measurement grid (points off the plate or on a support are masked).
+    pub grid: GridSpec,
+    /// The vibrometer.
+    pub ldv: LdvSpec,
+    /// The DAQ.
+    pub daq: DaqSpec,
+    /// The audio interface.
+    pub audio: AudioSpec,
+    /// Faults the mock hardware injects, in any order.
+    pub faults: Vec<FaultSpec>,
+}
+
+impl Scene {
+    /// The names of the built-in scenes.
+    pub fn builtin_names() -> &'static [&'static str] {
+        BUILTIN_NAMES
+    }
+
+    /// A built-in scene by name.
+    ///
+    /// # Errors
+    /// [`SceneError::NotFound`] for an unknown name. (A built-in that failed to parse would be a
+    /// [`SceneError::Schema`] or [`SceneError::Invalid`]; the tests make sure none does.)
+    pub fn builtin(name: &str) -> Result<Scene, SceneError> {
+        match BUILTINS.iter().find(|(n, _)| *n == name) {
+            Some((n, text)) => Self::from_toml_str(text, &format!("<built-in {n}>")),
+            None => Err(SceneError::NotFound { name: name.to_owned(), known: BUILTIN_NAMES.join(", ") }),
+        }
+    }
+
+    /// Parses and validates a scene from TOML text; `origin` (a path, or a built-in's name) prefixes every error
+    /// message.
+    ///
+    /// # Errors
+    /// [`SceneError::Syntax`] (not TOML), [`SceneError::Schema`] (unknown key, missing key, wrong type, unknown
+    /// fault kind...) or [`SceneError::Invalid`] (a value outside its valid range), each with the line and key path.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let doc = DocIndex::parse(text, origin)?;
+        let file: SceneFile = toml::from_str(text).map_err(|e| doc.schema_error(&e))?;
+        let at = |p: Problem| SceneError::Invalid {
+            location: doc.location_of_path(&p.key_path),
+            key_path: p.key_path,
+            message: p.message,
+        };
+        let scene = file.resolve().map_err(at)?;
+        scene.check().map_err(at)?;
+        Ok(scene)
+    }
+
+    /// Reads, parses and validates a scene file.
+    ///
+    /// # Errors
+    /// [`SceneError::Io`] when the file cannot be read; otherwise as [`Scene::from_toml_str`].
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| SceneError::Io { path: origin.clone(), reason: e.to_string() })?;
+        Self::from_toml_str(&text, &origin)
+    }
+
+    /// A built-in scene when `name_or_path` is a built-in's name (a built-in wins over a file of the same name in
+    /// the working directory), else the scene file at that path.
+    ///
+    /// # Errors
+    /// [`SceneError::NotFound`] when it is neither; otherwise as [`Scene::load`].
+    pub fn resolve(name_or_path: &str) -> Result<Scene, SceneError> {
+        if BUILTIN_NAMES.contains(&name_or_path) {
+            return Self::builtin(name_or_path);
+        }
+        let path = Path::new(name_or_path);
+        if path.exists() {
+            Self::load(path)
+        } else {
+            Err(SceneError::NotFound { name: name_or_path.to_owned(), known: BUILTIN_NAMES.join(", ") })
+        }
+    }
+
+    /// Checks every valid range stated on the scene's types, and that parts sit where they can: supports wholly
+    /// under the plate, actuators on the plate and off the supports, some grid point measurable, enough audio
+    /// channels for the actuators and the loopback reference.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the first offending key.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        self.check().map_err(|p| SceneError::Invalid {
+            location: format!("scene `{}`", self.name),
+            key_path: p.key_path,
+            message: p.message,
+        })
+    }
+
+    /// The scene as TOML, fully resolved (defaults filled in); [`Scene::from_toml_str`] reads it back to an equal
+    /// scene. The canonical form: the same scene always gives the same text.
+    ///
+    /// The scene's types all have a TOML form, so writing cannot fail; were it ever to, the text would be a single
+    /// TOML comment saying why (which reads back as a missing-key error, never as a wrong scene).
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string(&SceneFile::from(self.clone()))
+            .unwrap_or_else(|e| format!("# scene `{}` cannot be written as TOML: {e}\n", self.name))
+    }
+
+    /// A stable 64-bit hash of [`Scene::to_toml_string`] (FNV-1a): the same scene gives the same hash on every
+    /// machine and run, so it can key caches and datasets.
+    pub fn content_hash(&self) -> u64 {
+        const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+        const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
+        self.to_toml_string().bytes().fold(FNV_OFFSET, |h, b| (h ^ u64::from(b)).wrapping_mul(FNV_PRIME))
+    }
+
+    /// Per grid point (by flat index): true when it can be measured, on the plate (edge included) and not on a
+    /// support pad.
+    pub fn grid_mask(&self) -> Vec<bool> {
+        (0..self.grid.len())
+            .map(|i| {
+                let (x, y) = self.grid.position_m(i);
+                self.plate.outline.contains(x, y) && !self.supports.iter().any(|s| s.covers(x, y))
+            })
+            .collect()
+    }
+
+    /// Flat indices of the measurable grid points ([`Scene::grid_mask`] true), ascending.
+    pub fn measured_points(&self) -> Vec<usize> {
+        self.grid_mask().iter().enumerate().filter_map(|(i, &m)| m.then_some(i)).collect()
+    }
+}
+
+impl TryFrom<SceneFile> for Scene {
+    type Error = SceneError;
+
+    fn try_from(file: SceneFile) -> Result<Self, SceneError> {
+        let scene = file.resolve().map_err(|p| SceneError::Invalid {
+            location: "scene".to_owned(),
+            key_path: p.key_path,
+            message: p.message,
+        })?;
+        scene.validate()?;
+        Ok(scene)
+    }
+}

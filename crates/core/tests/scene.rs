@@ -1,0 +1,440 @@
+//! Scenes: the built-ins, round trips, the grid mask, and every validation error.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may unwrap
+
+use std::path::Path;
+
+use metaplate_core::scene::{FaultKind, Outline, ResonatorModel, ResonatorSpec, Scene, SceneError};
+
+const METAMATERIAL: &str = include_str!("../scenes/metamaterial.toml");
+const RECT_FAULTS: &str = include_str!("scenes/rect_faults.toml");
+
+// Positions here are sums and products of a few decimal lengths below 1 m: 1e-12 m is ~1e4 ulps, ample for rounding
+// and far below any physical length.
+const TOL_M: f64 = 1e-12;
+
+#[test]
+fn builtins_load_validate_and_transcribe_the_paper() {
+    assert_eq!(Scene::builtin_names(), ["metamaterial", "homogeneous"]);
+    for name in Scene::builtin_names() {
+        let s = Scene::builtin(name).unwrap();
+        assert_eq!(s.name, *name);
+        s.validate().unwrap();
+        assert_eq!(s.plate.outline, Outline::Stadium { straight_length_m: 0.10, radius_m: 0.075 });
+        assert_eq!(
+            (s.plate.thickness_m, s.plate.youngs_modulus_pa, s.plate.poisson_ratio, s.plate.density_kg_m3),
+            (0.0015, 3.2e9, 0.37, 1180.0)
+        );
+        assert_eq!((s.supports.len(), s.actuators.len()), (8, 8));
+        assert_eq!((s.grid.nx, s.grid.ny, s.grid.spacing_m), (49, 25, 0.005));
+        assert!(s.faults.is_empty());
+    }
+    let meta = Scene::builtin("metamaterial").unwrap();
+    assert_eq!(meta.resonators.model, ResonatorModel::AddedMass);
+    assert_eq!((meta.resonators.pitch_m, meta.resonators.rod_height_m), (0.008, 0.0334));
+    assert_eq!(Scene::builtin("homogeneous").unwrap().resonators.model, ResonatorModel::None);
+    assert!(matches!(Scene::builtin("aluminium"), Err(SceneError::NotFound { .. })));
+}
+
+#[test]
+fn the_two_builtins_differ_only_in_resonators() {
+    // The two files repeat the shared parts; this keeps them from drifting apart.
+    let meta = Scene::builtin("metamaterial").unwrap();
+    let homo = Scene::builtin("homogeneous").unwrap();
+    let twin = Scene {
+        name: homo.name.clone(),
+        description: homo.description.clone(),
+        resonators: ResonatorSpec::none(),
+        ..meta.clone()
+    };
+    assert_eq!(twin, homo);
+    assert_ne!(meta.content_hash(), homo.content_hash());
+}
+
+#[test]
+fn round_trip_gives_an_equal_scene_and_hash() {
+    let scenes = [
+        Scene::builtin("metamaterial").unwrap(),
+        Scene::builtin("homogeneous").unwrap(),
+        Scene::from_toml_str(RECT_FAULTS, "rect_faults.toml").unwrap(),
+    ];
+    for s in scenes {
+        let text = s.to_toml_string();
+        let back = Scene::from_toml_str(&text, "round trip").unwrap();
+        assert_eq!(back, s);
+        assert_eq!(back.content_hash(), s.content_hash());
+        assert_eq!(back.to_toml_string(), text, "the canonical text is a fixed point");
+    }
+}
+
+#[test]
+fn test_scene_reads_overrides_faults_and_defaults() {
+    let s = Scene::from_toml_str(RECT_FAULTS, "rect_faults.toml").unwrap();
+    assert!(s.supports.is_empty());
+    assert_eq!(s.resonators.model, ResonatorModel::RockingRod);
+    assert_eq!((s.resonators.height_spread, s.resonators.mass_ratio), (0.0, None));
+    let (a, b) = (&s.actuators[0].voice_coil, &s.actuators[1].voice_coil);
+    assert_eq!((a.nonlinearity, a.spread_db, b.nonlinearity, b.spread_db), (0.0, 0.0, 0.05, 3.0));
+    assert_eq!(b.rolloff_hz, a.rolloff_hz);
+    let kinds: Vec<FaultKind> = s.faults.iter().map(|f| f.kind).collect();
+    assert_eq!(kinds, [FaultKind::SerialTimeout, FaultKind::LdvDropout, FaultKind::Disconnect]);
+    // Every grid point of this rectangle is on the plate and there are no supports.
+    assert_eq!(s.measured_points().len(), 45);
+}
+
+#[test]
+fn hash_follows_content() {
+    let s = Scene::builtin("metamaterial").unwrap();
+    assert_eq!(s.content_hash(), Scene::builtin("metamaterial").unwrap().content_hash());
+    let mut t = s.clone();
+    t.seed += 1;
+    assert_ne!(t.content_hash(), s.content_hash());
+    let mut u = s.clone();
+    u.actuators[3].voice_coil.nonlinearity = 0.02;
+    assert_ne!(u.content_hash(), s.content_hash());
+    // A per-actuator difference survives the canonical form's default-plus-overrides encoding.
+    assert_eq!(Scene::from_toml_str(&u.to_toml_string(), "u").unwrap(), u);
+}
+
+#[test]
+fn paper_grid_mask() {
+    let s = Scene::builtin("metamaterial").unwrap();
+    let mask = s.grid_mask();
+    assert_eq!(mask.len(), 1225);
+    // 1065 counted independently with exact rational arithmetic (Python `fractions`): of the 1225 points, 72 lie
+    // outside the stadium (8 more lie exactly on its edge, the 3-4-5 points such as (0.095, 0.06) m, and count as
+    // on it), and 88 lie on the 8 pads (6 under each straight-edge pad, 16 under each cap pad).
+    assert_eq!(s.measured_points().len(), 1065);
+    let at = |x: f64, y: f64| {
+        let i = (0..s.grid.len())
+            .find(|&i| {
+                let (px, py) = s.grid.position_m(i);
+                (px - x).abs() < TOL_M && (py - y).abs() < TOL_M
+            })
+            .unwrap();
+        mask[i]
+    };
+    assert!(at(0.0, 0.0), "the centre is measured");
+    assert!(!at(0.12, 0.06) && !at(-0.12, -0.06), "bounding-box corners are off the stadium");
+    assert!(at(0.095, 0.06) && at(-0.11, -0.045), "points exactly on the edge count as on the plate");
+    assert!(!at(0.10, 0.06), "just beyond the edge");
+    assert!(!at(0.03, 0.06) && !at(0.09, 0.04) && !at(-0.085, -0.05), "under support pads");
+    assert!(at(0.04, 0.05), "beside a pad");
+    assert_eq!(Scene::builtin("homogeneous").unwrap().grid_mask(), mask);
+}
+
+#[test]
+fn actuator_layout_is_peripheral_clear_off_grid_and_asymmetric() {
+    let s = Scene::builtin("metamaterial").unwrap();
+    let outline = s.plate.outline;
+    for (i, a) in s.actuators.iter().enumerate() {
+        let d = outline.distance_inside_m(a.x_m, a.y_m);
+        assert!((0.015..=0.020).contains(&d), "actuator {i} is {d} m from the edge");
+        // The magnets are 1 cm across: keep their centre 5 mm + margin clear of every pad's square.
+        for p in &s.supports {
+            let gap = ((a.x_m - p.x_m).abs().max((a.y_m - p.y_m).abs())) - p.size_m / 2.0;
+            assert!(gap >= 0.008, "actuator {i} is {gap} m from a pad");
+        }
+        // Half a grid step (2.5 mm) from the nearest grid line in both directions: never on a grid point.
+        for (v, o) in [(a.x_m, s.grid.origin_x_m), (a.y_m, s.grid.origin_y_m)] {
+            let steps = (v - o) / s.grid.spacing_m;
+            assert!(((steps - steps.floor()) - 0.5).abs() < 1e-6, "actuator {i} coordinate {v} m");
+        }
+    }
+    let mirrored = |fx: f64, fy: f64| {
+        s.actuators
+            .iter()
+            .all(|a| s.actuators.iter().any(|b| (b.x_m - fx * a.x_m).abs() < 1e-3 && (b.y_m - fy * a.y_m).abs() < 1e-3))
+    };
+    assert!(!mirrored(-1.0, 1.0) && !mirrored(1.0, -1.0) && !mirrored(-1.0, -1.0), "the layout must not be symmetric");
+    // The supports, by contrast, are symmetric about both axes.
+    for p in &s.supports {
+        assert!(s.supports.iter().any(|q| (q.x_m + p.x_m).abs() < TOL_M && (q.y_m - p.y_m).abs() < TOL_M));
+        assert!(s.supports.iter().any(|q| (q.x_m - p.x_m).abs() < TOL_M && (q.y_m + p.y_m).abs() < TOL_M));
+    }
+}
+
+#[test]
+fn resonator_lattice_and_mass_ratio() {
+    let s = Scene::builtin("metamaterial").unwrap();
+    let sites = s.resonators.lattice_sites_m(&s.plate.outline).unwrap();
+    // 421 counted independently (Python, same rule): > 300 as the paper says.
+    assert_eq!(sites.len(), 421);
+    assert!(sites.iter().all(|&(x, y)| s.plate.outline.distance_inside_m(x, y) >= 0.01));
+    // Rod mass / plate mass per cell, 19.8165 by hand (see metamaterial.toml); 1e-4 is the hand value's rounding.
+    let ratio = s.resonators.cell_mass_ratio(s.plate.mass_per_area_kg_m2()).unwrap();
+    assert!((ratio - 19.8165).abs() < 1e-4, "{ratio}");
+    assert_eq!(s.resonators.mass_ratio, Some(19.8));
+    let homo = Scene::builtin("homogeneous").unwrap();
+    assert!(homo.resonators.lattice_sites_m(&homo.plate.outline).unwrap().is_empty());
+    assert!(homo.resonators.cell_mass_ratio(homo.plate.mass_per_area_kg_m2()).is_err(), "0/0 is refused");
+    let tiny = ResonatorSpec { pitch_m: 1e-6, ..s.resonators };
+    assert!(tiny.lattice_sites_m(&s.plate.outline).is_err(), "3.75e10 rods exceed the limit");
+}
+
+#[test]
+fn plate_a0_dispersion() {
+    let p = Scene::builtin("homogeneous").unwrap().plate;
+    // D = 3.2e9 * 0.0015^3 / (12 * (1 - 0.37^2)) = 1.042753 N m (Python); 1e-6 relative covers its 7 digits.
+    let d = p.bending_stiffness_n_m();
+    assert!((d / 1.042_753 - 1.0).abs() < 1e-6, "{d}");
+    assert!((p.mass_per_area_kg_m2() - 1.77).abs() < 1e-12);
+    // At 100 Hz: k = (1.77 * (200 pi)^2 / D)^(1/4) = 28.611 rad/m, lambda = 0.21960 m (Python); 1e-4 relative
+    // covers the 5-digit reference values.
+    let k = p.a0_wavenumber_rad_m(100.0).unwrap();
+    assert!((k / 28.611 - 1.0).abs() < 1e-4, "{k}");
+    assert!((p.a0_wavelength_m(100.0).unwrap() / 0.21960 - 1.0).abs() < 1e-4);
+    // lambda goes as f^(-1/2): exactly (to rounding, 1e-12 relative) half at 4x the frequency.
+    let ratio = p.a0_wavelength_m(400.0).unwrap() / p.a0_wavelength_m(100.0).unwrap();
+    assert!((ratio - 0.5).abs() < 1e-12);
+    // Extremes: 0 Hz has k = 0 and no finite wavelength; an absurd frequency is still finite.
+    assert_eq!(p.a0_wavenumber_rad_m(0.0).unwrap(), 0.0);
+    assert!(matches!(p.a0_wavelength_m(0.0), Err(SceneError::InvalidArgument { .. })));
+    for f_hz in [f64::MIN_POSITIVE, 1e-300, 1e300, f64::MAX] {
+        let lambda = p.a0_wavelength_m(f_hz).unwrap();
+        assert!(lambda.is_finite() && lambda > 0.0, "{f_hz} Hz: {lambda}");
+    }
+    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+        assert!(matches!(p.a0_wavenumber_rad_m(bad), Err(SceneError::InvalidArgument { .. })), "{bad}");
+    }
+}
+
+#[test]
+fn load_and_resolve_files() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/rect_faults.toml");
+    let s = Scene::load(&path).unwrap();
+    assert_eq!(s.name, "rect-faults");
+    assert_eq!(Scene::resolve(path.to_str().unwrap()).unwrap(), s);
+    assert_eq!(Scene::resolve("homogeneous").unwrap(), Scene::builtin("homogeneous").unwrap());
+    assert!(matches!(Scene::resolve("/nonexistent/scene.toml"), Err(SceneError::NotFound { .. })));
+    // A directory exists but is not a readable file.
+    assert!(matches!(Scene::load(Path::new(env!("CARGO_MANIFEST_DIR"))), Err(SceneError::Io { .. })));
+}
+
+#[test]
+fn seed_beyond_toml_integers_is_refused() {
+    let mut s = Scene::builtin("metamaterial").unwrap();
+    s.seed = u64::MAX;
+    let e = s.validate().unwrap_err();
+    assert_eq!(e.key_path(), Some("seed"));
+    // The toml crate writes and reads such an integer, but the TOML spec (and so other readers) does not.
+    let e = Scene::from_toml_str(&s.to_toml_string(), "x.toml").unwrap_err();
+    assert_eq!(e.key_path(), Some("seed"));
+}
+
+/// Replaces the first `from` in the metamaterial scene by `to` (which must change the text).
+fn mutate(from: &str, to: &str) -> String {
+    assert!(METAMATERIAL.contains(from), "test setup: `{from}` is not in the scene");
+    METAMATERIAL.replacen(from, to, 1)
+}
+
+/// The metamaterial scene without the table whose header is `header` (up to the next blank line).
+fn without_table(header: &str) -> String {
+    let start = METAMATERIAL.find(header).unwrap();
+    let end = start + METAMATERIAL[start..].find("\n\n").unwrap();
+    format!("{}{}", &METAMATERIAL[..start], &METAMATERIAL[end..])
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Kind {
+    Syntax,
+    Schema,
+    Invalid,
+}
+
+#[test]
+fn every_validation_error_names_file_key_and_reason() {
+    let fault = |kind: &str, at_s: &str| {
+        format!("{METAMATERIAL}\n[[faults]]\nkind = \"{kind}\"\nat_s = {at_s}\nduration_s = 0.1\n")
+    };
+    // (scene text, error kind, key path, a phrase the message must contain)
+    let cases: Vec<(String, Kind, &str, &str)> = vec![
+        (mutate("[plate]", "[plate"), Kind::Syntax, "", "not valid TOML"),
+        (
+            mutate("thickness_m = 0.0015", "thickness_mm = 1.5"),
+            Kind::Schema,
+            "plate.thickness_mm",
+            "unknown key `thickness_mm`: this field is `thickness_m`, in metres",
+        ),
+        (
+            mutate("density_kg_m3", "density_g_cm3"),
+            Kind::Schema,
+            "plate.density_g_cm3",
+            "this field is `density_kg_m3`, in kg/m^3",
+        ),
+        (mutate("[grid]\n", "[grid]\ncolour = 1\n"), Kind::Schema, "grid.colour", "expected one of `nx`"),
+        (mutate("thickness_m = 0.0015\n", ""), Kind::Schema, "plate", "missing key `thickness_m`"),
+        (mutate("seed = 20240601\n", ""), Kind::Schema, "", "missing key `seed`"),
+        (mutate("seed = 20240601", "seed = -1"), Kind::Schema, "seed", "invalid value"),
+        (
+            mutate("thickness_m = 0.0015", "thickness_m = \"1.5 mm\""),
+            Kind::Schema,
+            "plate.thickness_m",
+            "write a plain number: `thickness_m` is in metres",
+        ),
+        (mutate("nx = 49", "nx = 4.9"), Kind::Schema, "grid.nx", "invalid type"),
+        (
+            mutate("shape = \"stadium\"", "shape = \"ellipse\""),
+            Kind::Schema,
+            "plate.outline.shape",
+            "unknown variant `ellipse`",
+        ),
+        (mutate("pitch_m = 0.008\n", ""), Kind::Schema, "resonators", "missing key `pitch_m`"),
+        (
+            mutate("x_m = -0.0125\n", "x_m = -0.0125\nvoice_coil = { q = 3.0 }\n"),
+            Kind::Schema,
+            "actuators[6].voice_coil.q",
+            "unknown key `q`",
+        ),
+        (fault("gremlins", "1.0"), Kind::Schema, "faults[0].kind", "unknown variant `gremlins`"),
+        (
+            mutate("thickness_m = 0.0015", "thickness_m = -0.0015"),
+            Kind::Invalid,
+            "plate.thickness_m",
+            "must be finite and > 0",
+        ),
+        (
+            mutate("thickness_m = 0.0015", "thickness_m = 0"),
+            Kind::Invalid,
+            "plate.thickness_m",
+            "must be finite and > 0",
+        ),
+        (mutate("thickness_m = 0.0015", "thickness_m = nan"), Kind::Invalid, "plate.thickness_m", "must be finite"),
+        (mutate("thickness_m = 0.0015", "thickness_m = 1.5"), Kind::Invalid, "plate.thickness_m", "1.5 mm is 0.0015"),
+        (mutate("radius_m = 0.075", "radius_m = -0.075"), Kind::Invalid, "plate.outline.radius_m", "> 0"),
+        (mutate("poisson_ratio = 0.37", "poisson_ratio = 0.5"), Kind::Invalid, "plate.poisson_ratio", "(-1, 0.5)"),
+        (mutate("poisson_ratio = 0.37", "poisson_ratio = -1.0"), Kind::Invalid, "plate.poisson_ratio", "(-1, 0.5)"),
+        (
+            mutate("youngs_modulus_pa = 3.2e9", "youngs_modulus_pa = 0.0"),
+            Kind::Invalid,
+            "plate.youngs_modulus_pa",
+            "must lie in",
+        ),
+        (
+            mutate("youngs_modulus_pa = 3.2e9", "youngs_modulus_pa = 3.2"),
+            Kind::Invalid,
+            "plate.youngs_modulus_pa",
+            "in the key's unit",
+        ),
+        (
+            mutate("density_kg_m3 = 1180.0", "density_kg_m3 = 1.18"),
+            Kind::Invalid,
+            "plate.density_kg_m3",
+            "in the key's unit",
+        ),
+        (mutate("loss_factor = 0.03", "loss_factor = -0.03"), Kind::Invalid, "plate.loss_factor", "must lie in"),
+        (
+            mutate("x_m = 0.03\ny_m = 0.063", "x_m = 0.03\ny_m = 0.07"),
+            Kind::Invalid,
+            "supports[0]",
+            "not wholly under the plate",
+        ),
+        (
+            mutate("stiffness_n_per_m = 3.2e3", "stiffness_n_per_m = 0.0"),
+            Kind::Invalid,
+            "supports[0].stiffness_n_per_m",
+            "> 0",
+        ),
+        (
+            mutate("rod_diameter_m = 0.003175", "rod_diameter_m = 0.01"),
+            Kind::Invalid,
+            "resonators.rod_diameter_m",
+            "do not fit",
+        ),
+        (
+            mutate("region_inset_m = 0.01", "region_inset_m = 0.08"),
+            Kind::Invalid,
+            "resonators.region_inset_m",
+            "no lattice site",
+        ),
+        (mutate("height_spread = 0.01", "height_spread = 0.7"), Kind::Invalid, "resonators.height_spread", "[0, 0.5)"),
+        (mutate("mass_ratio = 19.8", "mass_ratio = -1.0"), Kind::Invalid, "resonators.mass_ratio", "> 0"),
+        (mutate("x_m = 0.1075", "x_m = 0.2075"), Kind::Invalid, "actuators[0]", "off the plate"),
+        (
+            mutate("x_m = 0.0075\ny_m = 0.0575", "x_m = 0.03\ny_m = 0.0575"),
+            Kind::Invalid,
+            "actuators[2]",
+            "on support pad supports[0]",
+        ),
+        (
+            mutate("suspension_q = 2.0", "suspension_q = -2.0"),
+            Kind::Invalid,
+            "actuators[0].voice_coil.suspension_q",
+            "> 0",
+        ),
+        (without_table("[voice_coil]"), Kind::Invalid, "actuators[0].voice_coil", "missing key `force_factor_n_per_v`"),
+        (mutate("spacing_m = 0.005", "spacing_m = 0.0"), Kind::Invalid, "grid.spacing_m", "positive"),
+        (mutate("spacing_m = 0.005", "spacing_m = -0.005"), Kind::Invalid, "grid.spacing_m", "positive"),
+        (mutate("nx = 49", "nx = 0"), Kind::Invalid, "grid.nx", "empty"),
+        (mutate("nx = 49", "nx = 100000"), Kind::Invalid, "grid.nx", "exceed the limit"),
+        (mutate("origin_x_m = -0.12", "origin_x_m = 1.0"), Kind::Invalid, "grid", "no grid point is on the plate"),
+        (
+            mutate("dropout_probability = 0.001", "dropout_probability = 1.5"),
+            Kind::Invalid,
+            "ldv.dropout_probability",
+            "must lie in",
+        ),
+        (
+            mutate("speckle_mean_level = 0.8", "speckle_mean_level = 0.0"),
+            Kind::Invalid,
+            "ldv.speckle_mean_level",
+            "(0, 1]",
+        ),
+        (mutate("bits = 16", "bits = 0"), Kind::Invalid, "daq.bits", "1..=32"),
+        (
+            mutate("clock_offset_ppm = 20.0", "clock_offset_ppm = 5000.0"),
+            Kind::Invalid,
+            "daq.clock_offset_ppm",
+            "must lie in",
+        ),
+        (mutate("channels = 24", "channels = 8"), Kind::Invalid, "audio.channels", "loopback"),
+        (mutate("latency_s = 0.005", "latency_s = -0.005"), Kind::Invalid, "audio.latency_s", ">= 0"),
+        (fault("usb_stall", "-1.0"), Kind::Invalid, "faults[0].at_s", ">= 0"),
+    ];
+    for (text, kind, key_path, phrase) in cases {
+        let err = Scene::from_toml_str(&text, "test.toml").unwrap_err();
+        let msg = err.to_string();
+        let kind_ok = matches!(
+            (kind, &err),
+            (Kind::Syntax, SceneError::Syntax { .. })
+                | (Kind::Schema, SceneError::Schema { .. })
+                | (Kind::Invalid, SceneError::Invalid { .. })
+        );
+        assert!(kind_ok, "{kind:?} expected, got {err:?}");
+        assert!(msg.starts_with("test.toml:"), "no file and line in: {msg}");
+        if !matches!(kind, Kind::Syntax) {
+            assert_eq!(err.key_path(), Some(key_path), "{msg}");
+        }
+        assert!(msg.contains(phrase), "`{phrase}` not in: {msg}");
+    }
+}
+
+#[test]
+fn no_actuators_is_refused() {
+    let mut s = Scene::builtin("homogeneous").unwrap();
+    s.actuators.clear();
+    assert_eq!(s.validate().unwrap_err().key_path(), Some("actuators"));
+}
+
+#[test]
+fn errors_point_at_the_right_line() {
+    let text = mutate("poisson_ratio = 0.37", "poisson_ratio = 0.6");
+    let line = text[..text.find("poisson_ratio = 0.6").unwrap()].lines().count() + 1;
+    let msg = Scene::from_toml_str(&text, "f.toml").unwrap_err().to_string();
+    assert!(msg.starts_with(&format!("f.toml:{line}:1: plate.poisson_ratio:")), "{msg}");
+    let text = mutate("[grid]\n", "[grid]\ncolour = 1\n");
+    let line = text[..text.find("colour").unwrap()].lines().count() + 1;
+    let msg = Scene::from_toml_str(&text, "f.toml").unwrap_err().to_string();
+    assert!(msg.starts_with(&format!("f.toml:{line}:1: grid.colour:")), "{msg}");
+}
+
+#[test]
+fn serde_form_is_the_file_form() {
+    // Other crates embed a scene in manifests through serde: the form must be the file's, and reading validates.
+    let s = Scene::from_toml_str(RECT_FAULTS, "rect_faults.toml").unwrap();
+    assert_eq!(toml::to_string(&s).unwrap(), s.to_toml_string());
+    assert_eq!(toml::from_str::<Scene>(&s.to_toml_string()).unwrap(), s);
+    let bad = s.to_toml_string().replacen("thickness_m = 0.002", "thickness_m = -0.002", 1);
+    let err = toml::from_str::<Scene>(&bad).unwrap_err();
+    assert!(err.to_string().contains("plate.thickness_m"), "{err}");
+}
