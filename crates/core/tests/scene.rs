@@ -164,7 +164,9 @@ fn resonator_lattice_and_mass_ratio() {
     // Rod mass / plate mass per cell, 19.8165 by hand (see metamaterial.toml); 1e-4 is the hand value's rounding.
     let ratio = s.resonators.cell_mass_ratio(s.plate.mass_per_area_kg_m2()).unwrap();
     assert!((ratio - 19.8165).abs() < 1e-4, "{ratio}");
-    assert_eq!(s.resonators.mass_ratio, Some(19.8));
+    // The built-in carries fitted effective overrides (the plate model's dispersion tests own their values).
+    assert!(s.resonators.mass_ratio.is_some_and(|mu| mu > 1.0), "{:?}", s.resonators.mass_ratio);
+    assert!(s.resonators.resonance_hz.is_some_and(|f| f > 600.0), "{:?}", s.resonators.resonance_hz);
     let homo = Scene::builtin("homogeneous").unwrap();
     assert!(homo.resonators.lattice_sites_m(&homo.plate.outline).unwrap().is_empty());
     assert!(homo.resonators.cell_mass_ratio(homo.plate.mass_per_area_kg_m2()).is_err(), "0/0 is refused");
@@ -348,7 +350,7 @@ fn every_validation_error_names_file_key_and_reason() {
             "no lattice site",
         ),
         (mutate("height_spread = 0.01", "height_spread = 0.7"), Kind::Invalid, "resonators.height_spread", "[0, 0.5)"),
-        (mutate("mass_ratio = 19.8", "mass_ratio = -1.0"), Kind::Invalid, "resonators.mass_ratio", "> 0"),
+        (mutate("\nmass_ratio = ", "\nmass_ratio = -1.0\n# was "), Kind::Invalid, "resonators.mass_ratio", "> 0"),
         (mutate("x_m = 0.1075", "x_m = 0.2075"), Kind::Invalid, "actuators[0]", "off the plate"),
         (
             mutate("x_m = 0.0075\ny_m = 0.0575", "x_m = 0.03\ny_m = 0.0575"),
