@@ -81,7 +81,7 @@ pub fn inverse(spectrum: &[Complex64], n: usize) -> Result<Vec<f64>, DspError> {
     }
     let mut bins = spectrum.to_vec();
     bins[0].im = 0.0;
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         let last = bins.len() - 1;
         bins[last].im = 0.0;
     }

@@ -168,12 +168,12 @@ impl SweepSpec {
         let fade_in = (self.fade_in_s * fs).round() as usize;
         let fade_out = (self.fade_out_s * fs).round() as usize;
         let mut x: Vec<f64> = (0..n).map(|i| self.amplitude * self.phase_rad(i as f64 / fs).sin()).collect();
-        for i in 0..fade_in.min(n) {
-            x[i] *= 0.5 * (1.0 - (PI * i as f64 / fade_in as f64).cos());
+        for (i, v) in x.iter_mut().enumerate().take(fade_in) {
+            *v *= 0.5 * (1.0 - (PI * i as f64 / fade_in as f64).cos());
         }
-        for j in 0..fade_out.min(n) {
+        for (j, v) in x.iter_mut().rev().enumerate().take(fade_out) {
             // j counts back from the last sample, which gets gain 0.
-            x[n - 1 - j] *= 0.5 * (1.0 - (PI * j as f64 / fade_out as f64).cos());
+            *v *= 0.5 * (1.0 - (PI * j as f64 / fade_out as f64).cos());
         }
         check_result("sweep", &x)?;
         Ok(x)
