@@ -1,1 +1,13 @@
-//! Wave-field analysis (being written).
+//! Wave-field analysis for metaplate, in `f64` throughout.
+//!
+//! [`wavelength`]: plate wavelengths from a k-space (2-D spatial Fourier) transform of the Green's functions at one
+//! frequency, as in the paper's Wave Field Analysis, with per-actuator estimates summarised across actuators.
+//! (POD, singular-value authority, pixel area and refresh rate will join it.)
+//!
+//! Every public routine checks its input: an empty or mismatched input, a NaN or infinity, or a parameter outside the
+//! routine's stated valid range is an [`AnalysisError`], never a panic and never a NaN in the result.
+
+pub mod error;
+pub mod wavelength;
+
+pub use error::AnalysisError;

@@ -1,0 +1,74 @@
+//! The one error type of this crate.
+
+use metaplate_dsp::DspError;
+
+/// Why an analysis routine refused its input or could not produce a finite result.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AnalysisError {
+    /// Two inputs that must match in length do not.
+    #[error("{what}: lengths {a} and {b} differ")]
+    LengthMismatch {
+        /// What was compared.
+        what: &'static str,
+        /// First length.
+        a: usize,
+        /// Second length.
+        b: usize,
+    },
+    /// A parameter lies outside the routine's valid range.
+    #[error("invalid {name}: {reason}")]
+    InvalidParameter {
+        /// Parameter name, with its unit where it has one.
+        name: &'static str,
+        /// What was wrong and what is accepted.
+        reason: String,
+    },
+    /// An input held NaN or an infinity (a device glitch, or a corrupt file).
+    #[error("{input} contains a non-finite value at index {index}")]
+    NonFinite {
+        /// Which input.
+        input: &'static str,
+        /// First offending index.
+        index: usize,
+    },
+    /// An input had no elements where at least one is needed.
+    #[error("{input} is empty")]
+    Empty {
+        /// Which input.
+        input: &'static str,
+    },
+    /// Too few grid points were measured for the analysis to mean anything.
+    #[error("only {measured} grid point(s) measured, at least {required} needed")]
+    TooFewPoints {
+        /// Measured (unmasked) points.
+        measured: usize,
+        /// Minimum accepted.
+        required: usize,
+    },
+    /// The input carries no energy the analysis can use (for the wavelength: an all-zero field, a field constant
+    /// over the measured points, or one whose only energy lies at k = 0).
+    #[error("{what}: the input has no usable energy")]
+    NoEnergy {
+        /// Which analysis.
+        what: &'static str,
+    },
+    /// A size would need more memory than the routine allows.
+    #[error("{what} needs {len} elements, more than the limit of {max}")]
+    TooLarge {
+        /// What was too large.
+        what: &'static str,
+        /// Requested size.
+        len: usize,
+        /// Limit.
+        max: usize,
+    },
+    /// The computation overflowed to NaN or infinity although the inputs were finite.
+    #[error("{what} produced a non-finite result; the input is outside the routine's valid range")]
+    NonFiniteResult {
+        /// Which computation.
+        what: &'static str,
+    },
+    /// A shared signal-processing helper refused its input.
+    #[error(transparent)]
+    Dsp(#[from] DspError),
+}
