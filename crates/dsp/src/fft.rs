@@ -192,26 +192,20 @@ mod tests {
         assert_eq!(fast_len(11).unwrap(), 12);
         assert_eq!(fast_len(97).unwrap(), 98);
         assert_eq!(fast_len(1025).unwrap(), 1029);
+        fn is_7_smooth(mut k: usize) -> bool {
+            for p in [2, 3, 5, 7] {
+                while k.is_multiple_of(p) {
+                    k /= p;
+                }
+            }
+            k == 1
+        }
         for n in [13usize, 1000, 72_001, 144_000] {
             let m = fast_len(n).unwrap();
             assert!(m >= n);
-            let mut r = m;
-            for p in [2, 3, 5, 7] {
-                while r % p == 0 {
-                    r /= p;
-                }
-            }
-            assert_eq!(r, 1, "{m} is not 7-smooth");
+            assert!(is_7_smooth(m), "{m} is not 7-smooth");
             // Minimal: no 7-smooth number in [n, m).
-            for k in n..m {
-                let mut r = k;
-                for p in [2, 3, 5, 7] {
-                    while r % p == 0 {
-                        r /= p;
-                    }
-                }
-                assert_ne!(r, 1, "{k} is smaller and 7-smooth");
-            }
+            assert!((n..m).all(|k| !is_7_smooth(k)), "a 7-smooth length below {m} exists");
         }
     }
 }

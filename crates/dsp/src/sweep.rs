@@ -8,6 +8,7 @@
 use std::f64::consts::PI;
 
 use crate::error::{DspError, check_result, check_sample_rate};
+use crate::window;
 
 /// The longest sweep generated: 2^27 samples (about 93 minutes at 24 kHz).
 pub const MAX_SWEEP_SAMPLES: usize = 1 << 27;
@@ -168,12 +169,13 @@ impl SweepSpec {
         let fade_in = (self.fade_in_s * fs).round() as usize;
         let fade_out = (self.fade_out_s * fs).round() as usize;
         let mut x: Vec<f64> = (0..n).map(|i| self.amplitude * self.phase_rad(i as f64 / fs).sin()).collect();
-        for (i, v) in x.iter_mut().enumerate().take(fade_in) {
-            *v *= 0.5 * (1.0 - (PI * i as f64 / fade_in as f64).cos());
+        let fade_in = fade_in.min(n);
+        let fade_out = fade_out.min(n);
+        for (v, w) in x.iter_mut().zip(window::fade_in(fade_in)) {
+            *v *= w;
         }
-        for (j, v) in x.iter_mut().rev().enumerate().take(fade_out) {
-            // j counts back from the last sample, which gets gain 0.
-            *v *= 0.5 * (1.0 - (PI * j as f64 / fade_out as f64).cos());
+        for (v, w) in x[n - fade_out..].iter_mut().zip(window::fade_out(fade_out)) {
+            *v *= w;
         }
         check_result("sweep", &x)?;
         Ok(x)

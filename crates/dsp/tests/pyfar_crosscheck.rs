@@ -10,7 +10,7 @@
 use std::path::PathBuf;
 
 use metaplate_dsp::band::BandLimit;
-use metaplate_dsp::deconv::{DeconvConfig, deconvolve, divide_spectra};
+use metaplate_dsp::deconv::{DeconvConfig, RINGING_GUARD_CYCLES, deconvolve, divide_spectra};
 use metaplate_dsp::fft;
 use metaplate_dsp::kirkeby::{KirkebyConfig, RegularisationProfile, TargetPhase, design_spectrum};
 use metaplate_dsp::sweep::{SweepKind, SweepSpec};
@@ -185,14 +185,21 @@ struct DeconvFixture {
     sample_rate_hz: f64,
     excitation: Vec<f64>,
     recording: Vec<f64>,
+    /// Our `deconvolve` FFT length without a band; also the length of the spectral comparisons.
     n_fft: usize,
+    /// `RINGING_GUARD_CYCLES` as `make_fixtures.py` replicated it.
+    ringing_guard_cycles: f64,
+    /// The band limit's ringing guard, samples, as `make_fixtures.py` computed it.
+    ringing_guard_samples: usize,
+    /// Our `deconvolve` FFT length with the band: `n_fft`'s minimum plus the guard, rounded up to a fast length.
+    n_fft_band: usize,
     ir_len: usize,
     regularisation: f64,
     band: Band,
     pyfar_pure_bins: PureBins,
-    /// pyfar's `deconvolve` given our `eps` (band case) as `regu_final` at every bin: `n_fft` samples.
+    /// pyfar's `deconvolve` given our `eps` (band case) as `regu_final` at every bin: `n_fft_band` samples.
     same_eps_band: Vec<f64>,
-    /// The same with our `eps` for no band (maximum over all bins).
+    /// The same with our `eps` for no band (maximum over all bins): `n_fft` samples.
     same_eps_full: Vec<f64>,
     /// pyfar's frequency-range regularisation with `regu_inside` = our regularisation, `regu_outside` = 1.
     range_regu_inside_ours: Vec<f64>,
@@ -214,6 +221,20 @@ impl DeconvFixture {
     fn gains(&self) -> Vec<f64> {
         self.band.limit().bin_gains(self.n_fft, self.sample_rate_hz)
     }
+
+    /// The FFT length our `deconvolve` uses, worked out here independently the way `deconv.rs` documents it:
+    /// `fast_len(max(recording, excitation + ir_len) + guard)`, the guard being `ceil(RINGING_GUARD_CYCLES fs / W)`
+    /// for the narrowest non-zero skirt width `W` with a band, 0 without. Returns `(guard, n)`.
+    fn our_fft_len(&self, band: Option<&Band>) -> (usize, usize) {
+        let guard = band.map_or(0, |b| {
+            let narrowest_hz =
+                [b.lo_transition_hz, b.hi_transition_hz].into_iter().filter(|w| *w > 0.0).fold(f64::INFINITY, f64::min);
+            assert!(narrowest_hz.is_finite(), "the fixture's band has skirts");
+            (RINGING_GUARD_CYCLES * self.sample_rate_hz / narrowest_hz).ceil() as usize
+        });
+        let min_len = self.recording.len().max(self.excitation.len() + self.ir_len);
+        (guard, fft::fast_len(min_len + guard).unwrap())
+    }
 }
 
 /// Our `deconvolve` is pyfar's `deconvolve` (`H = Y X* / (|X|^2 + eps)`, both zero-padded to one FFT length, time 0
@@ -222,16 +243,21 @@ impl DeconvFixture {
 /// band the first `ir_len` samples must agree directly; with one, pyfar's spectrum is multiplied by our gains here
 /// (explicitly, the one step pyfar does not have) before comparing.
 ///
+/// Both sides must use the same FFT length, since it sets the bins, the band gains and `max |X|^2`. With a band ours
+/// adds a ringing guard (`deconv.rs`, `ringing_guard`: 8 periods of the narrowest skirt, here 8 x 8000 / 50 = 1280
+/// samples), so pyfar was run at 2160 without the band and at 3456 with it; both lengths are checked against our
+/// convention first, so a change of that convention fails here with its own message, not as a numeric mismatch.
+///
 /// Tolerance 1e-10 of the response's peak: the two sides do the same arithmetic through different FFTs (pocketfft
-/// and rustfft at n = 2160), each accurate to ~1e-15 relative; the division is well conditioned everywhere (`eps`
+/// and rustfft at n = 2160 and 3456), each accurate to ~1e-15 relative; the division is well conditioned everywhere (`eps`
 /// bounds the gain at `1 / (2 sqrt(eps))`), so the difference stays near 1e-14. A wrong time origin, padding or
 /// `eps` would show at 1e-3 or more.
 #[test]
 fn deconvolve_matches_pyfar_given_the_same_regularisation() {
     let fx: DeconvFixture = load("deconvolution.json");
-    // Our FFT length convention (fast length of max(recording, excitation + ir_len)) is what pyfar was given.
-    let n = fft::fast_len(fx.recording.len().max(fx.excitation.len() + fx.ir_len)).unwrap();
-    assert_eq!(n, fx.n_fft);
+    // Our FFT length convention is what pyfar was given: no band, fast length of max(recording, excitation + ir_len).
+    let (_, n) = fx.our_fft_len(None);
+    assert_eq!(n, fx.n_fft, "our deconvolve's FFT length without a band changed: regenerate the pyfar fixtures");
     assert_eq!(fx.same_eps_full.len(), n);
 
     let ours = deconvolve(&fx.recording, &fx.excitation, &fx.config(None)).unwrap();
@@ -240,10 +266,23 @@ fn deconvolve_matches_pyfar_given_the_same_regularisation() {
     eprintln!("deconvolve, no band: max |ours - pyfar| / peak = {err:.3e}");
     assert!(err < 1e-10, "no band: relative error {err:e}");
 
-    // With our band: pyfar's spectrum times our gains, back to time, first ir_len samples.
-    let pyfar_spec = fft::forward(&fx.same_eps_band, n).unwrap();
-    let limited: Vec<Complex64> = pyfar_spec.iter().zip(fx.gains()).map(|(c, g)| c * g).collect();
-    let pyfar_limited = fft::inverse(&limited, n).unwrap();
+    // With our band: the FFT length grows by the ringing guard, which make_fixtures.py replicated.
+    assert_eq!(
+        RINGING_GUARD_CYCLES, fx.ringing_guard_cycles,
+        "deconv::RINGING_GUARD_CYCLES changed: update make_fixtures.py and regenerate the pyfar fixtures"
+    );
+    let (guard, n_band) = fx.our_fft_len(Some(&fx.band));
+    assert_eq!(
+        (guard, n_band),
+        (fx.ringing_guard_samples, fx.n_fft_band),
+        "our band-limited FFT length (ringing guard, length) differs from the fixture's: regenerate the pyfar fixtures"
+    );
+    assert_eq!(fx.same_eps_band.len(), n_band);
+    // pyfar's spectrum times our gains, back to time, first ir_len samples.
+    let pyfar_spec = fft::forward(&fx.same_eps_band, n_band).unwrap();
+    let gains = fx.band.limit().bin_gains(n_band, fx.sample_rate_hz);
+    let limited: Vec<Complex64> = pyfar_spec.iter().zip(gains).map(|(c, g)| c * g).collect();
+    let pyfar_limited = fft::inverse(&limited, n_band).unwrap();
     let ours = deconvolve(&fx.recording, &fx.excitation, &fx.config(Some(fx.band.limit()))).unwrap();
     let peak = pyfar_limited.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
     let err = max_abs_diff(&ours, &pyfar_limited[..fx.ir_len]) / peak;
