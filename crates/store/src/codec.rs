@@ -1,0 +1,287 @@
+//! Records to Parquet bytes and back, in the columns of [`crate::schema`].
+//!
+//! Encoding assumes records already checked ([`crate::index::RowIndex::check`]); decoding trusts nothing: a wrong
+//! column type, a null in a required column or an unknown status is a typed error, never a panic.
+
+use std::io::Write;
+use std::sync::Arc;
+
+use arrow_array::builder::{Float32Builder, ListBuilder};
+use arrow_array::cast::AsArray;
+use arrow_array::types::{
+    ArrowPrimitiveType, Float32Type, Float64Type, TimestampMicrosecondType, UInt16Type, UInt32Type,
+};
+use arrow_array::{
+    Array, ArrayRef, Float64Array, PrimitiveArray, RecordBatch, StringArray, TimestampMicrosecondArray, UInt16Array,
+    UInt32Array,
+};
+use bytes::Bytes;
+use parquet::arrow::ArrowWriter;
+use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+use parquet::basic::Compression;
+use parquet::file::properties::WriterProperties;
+
+use crate::error::StoreError;
+use crate::record::{IrMeta, IrRecord};
+use crate::schema::{self, Status, arrow_schema};
+
+/// Writer settings: Snappy (pure Rust, read by every Parquet reader); no dictionaries, which only cost time on
+/// impulse responses (nearly every f32 distinct) and save nothing worth having on the small key columns; one row
+/// group per batch.
+fn writer_properties() -> WriterProperties {
+    WriterProperties::builder()
+        .set_compression(Compression::SNAPPY)
+        .set_dictionary_enabled(false)
+        .set_max_row_group_row_count(None)
+        .set_max_row_group_bytes(None)
+        .build()
+}
+
+/// Assembles checked records into one Arrow record batch of the dataset schema.
+fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::ArrowError> {
+    let metas = || records.iter().map(|r| &r.meta);
+    let samples: usize = records.iter().map(|r| r.ir.len()).sum();
+    let mut ir = ListBuilder::with_capacity(Float32Builder::with_capacity(samples), records.len())
+        .with_field(Arc::new(schema::ir_item_field()));
+    for record in records {
+        ir.values().append_slice(&record.ir);
+        ir.append(true);
+    }
+    let columns: Vec<ArrayRef> = vec![
+        Arc::new(UInt32Array::from_iter_values(metas().map(|m| m.point_index))),
+        Arc::new(UInt32Array::from_iter_values(metas().map(|m| m.ix))),
+        Arc::new(UInt32Array::from_iter_values(metas().map(|m| m.iy))),
+        Arc::new(Float64Array::from_iter_values(metas().map(|m| m.x_m))),
+        Arc::new(Float64Array::from_iter_values(metas().map(|m| m.y_m))),
+        Arc::new(UInt16Array::from_iter_values(metas().map(|m| m.actuator))),
+        Arc::new(Float64Array::from_iter_values(metas().map(|m| m.sample_rate_hz))),
+        Arc::new(ir.finish()),
+        Arc::new(Float64Array::from_iter(metas().map(|m| m.snr_db))),
+        Arc::new(StringArray::from_iter(metas().map(|m| m.status.map(Status::as_str)))),
+        Arc::new(UInt32Array::from_iter(metas().map(|m| m.retries))),
+        Arc::new(
+            TimestampMicrosecondArray::from_iter(metas().map(|m| m.measured_at_unix_us))
+                .with_timezone(schema::MEASURED_AT_TZ),
+        ),
+    ];
+    RecordBatch::try_new(arrow_schema(), columns)
+}
+
+/// Writes `records` as one Parquet file (one row group) to `sink`; `file` names it in errors.
+///
+/// # Errors
+/// [`StoreError::Arrow`] or [`StoreError::Parquet`] (including I/O errors of `sink`, which Parquet wraps).
+pub(crate) fn write_parquet(sink: impl Write + Send, records: &[IrRecord], file: &str) -> Result<(), StoreError> {
+    let parquet = |source| StoreError::Parquet { file: file.to_string(), source };
+    let batch = to_record_batch(records).map_err(|source| StoreError::Arrow { file: file.to_string(), source })?;
+    let mut writer = ArrowWriter::try_new(sink, arrow_schema(), Some(writer_properties())).map_err(parquet)?;
+    writer.write(&batch).map_err(parquet)?;
+    writer.close().map_err(parquet)?;
+    Ok(())
+}
+
+/// The rows of one batch file: metadata per row, and the impulse responses back to back (row `r` spans
+/// `ir_offsets[r]..ir_offsets[r + 1]` of `ir_values`).
+#[derive(Debug, Default)]
+pub(crate) struct Decoded {
+    pub metas: Vec<IrMeta>,
+    pub ir_values: Vec<f32>,
+    pub ir_offsets: Vec<usize>,
+}
+
+impl Decoded {
+    /// `(meta, ir)` of every row, in file order.
+    pub(crate) fn rows(&self) -> impl Iterator<Item = (&IrMeta, &[f32])> {
+        self.metas.iter().zip(self.ir_offsets.windows(2)).map(|(meta, w)| (meta, &self.ir_values[w[0]..w[1]]))
+    }
+}
+
+/// Decodes a whole Parquet batch file held in memory; `file` names it in errors.
+///
+/// # Errors
+/// [`StoreError::Parquet`] for bytes that are not a readable Parquet file, [`StoreError::SchemaMismatch`] for a
+/// column missing or of another type, [`StoreError::InvalidRecord`] for a null in a required column or an unknown
+/// status string.
+pub(crate) fn read_parquet(bytes: Bytes, file: &str) -> Result<Decoded, StoreError> {
+    let parquet = |source| StoreError::Parquet { file: file.to_string(), source };
+    let builder = ParquetRecordBatchReaderBuilder::try_new(bytes).map_err(parquet)?;
+    check_schema(builder.schema(), file)?;
+    // No pre-allocation from the footer's row count: a hostile footer could ask for more than memory holds.
+    let reader = builder.build().map_err(parquet)?;
+    let mut decoded = Decoded { ir_offsets: vec![0], ..Decoded::default() };
+    for batch in reader {
+        let batch = batch.map_err(|source| StoreError::Arrow { file: file.to_string(), source })?;
+        decode_batch(&batch, file, &mut decoded)?;
+    }
+    Ok(decoded)
+}
+
+/// Checks that every column of the dataset schema is present with a readable type (extra columns are ignored, so
+/// that a later schema version's additions do not break old readers of the same version).
+fn check_schema(found: &arrow_schema::Schema, file: &str) -> Result<(), StoreError> {
+    for expected in arrow_schema().fields() {
+        let reason = match found.field_with_name(expected.name()) {
+            Err(_) => format!("column {} is missing", expected.name()),
+            Ok(f) if !schema::compatible(expected.data_type(), f.data_type()) => {
+                format!("column {} has type {}, expected {}", f.name(), f.data_type(), expected.data_type())
+            }
+            Ok(_) => continue,
+        };
+        return Err(StoreError::SchemaMismatch { file: file.to_string(), reason });
+    }
+    Ok(())
+}
+
+/// A column of `batch` as a primitive array of type `T`.
+fn primitive<'a, T: ArrowPrimitiveType>(
+    batch: &'a RecordBatch,
+    name: &str,
+    file: &str,
+) -> Result<&'a PrimitiveArray<T>, StoreError> {
+    batch.column_by_name(name).and_then(|c| c.as_primitive_opt::<T>()).ok_or_else(|| StoreError::SchemaMismatch {
+        file: file.to_string(),
+        reason: format!("column {name} is missing or has the wrong type"),
+    })
+}
+
+/// The value of a required (non-null) column at `row`.
+fn required<T: ArrowPrimitiveType>(
+    array: &PrimitiveArray<T>,
+    row: usize,
+    name: &str,
+    location: &dyn Fn() -> String,
+) -> Result<T::Native, StoreError> {
+    if array.is_null(row) {
+        return Err(StoreError::InvalidRecord { location: location(), reason: format!("{name} is null") });
+    }
+    Ok(array.value(row))
+}
+
+/// The value of an optional column at `row`.
+fn optional<T: ArrowPrimitiveType>(array: &PrimitiveArray<T>, row: usize) -> Option<T::Native> {
+    if array.is_null(row) { None } else { Some(array.value(row)) }
+}
+
+fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<(), StoreError> {
+    let mismatch = |reason: &str| StoreError::SchemaMismatch { file: file.to_string(), reason: reason.to_string() };
+    let point_index = primitive::<UInt32Type>(batch, schema::POINT_INDEX, file)?;
+    let ix = primitive::<UInt32Type>(batch, schema::IX, file)?;
+    let iy = primitive::<UInt32Type>(batch, schema::IY, file)?;
+    let x_m = primitive::<Float64Type>(batch, schema::X_M, file)?;
+    let y_m = primitive::<Float64Type>(batch, schema::Y_M, file)?;
+    let actuator = primitive::<UInt16Type>(batch, schema::ACTUATOR, file)?;
+    let sample_rate_hz = primitive::<Float64Type>(batch, schema::SAMPLE_RATE_HZ, file)?;
+    let snr_db = primitive::<Float64Type>(batch, schema::SNR_DB, file)?;
+    let retries = primitive::<UInt32Type>(batch, schema::RETRIES, file)?;
+    let measured_at = primitive::<TimestampMicrosecondType>(batch, schema::MEASURED_AT, file)?;
+    let status = batch
+        .column_by_name(schema::STATUS)
+        .and_then(|c| c.as_string_opt::<i32>())
+        .ok_or_else(|| mismatch("column status is missing or not utf8"))?;
+    let ir = batch
+        .column_by_name(schema::IR)
+        .and_then(|c| c.as_list_opt::<i32>())
+        .ok_or_else(|| mismatch("column ir is missing or not a list"))?;
+    let ir_values = ir.values().as_primitive_opt::<Float32Type>().ok_or_else(|| mismatch("ir items are not f32"))?;
+    let ir_offsets = ir.value_offsets();
+
+    for row in 0..batch.num_rows() {
+        let global = out.metas.len();
+        let location = || format!("{file} row {global}");
+        let invalid = |reason: String| StoreError::InvalidRecord { location: location(), reason };
+        let status = if status.is_null(row) {
+            None
+        } else {
+            let text = status.value(row);
+            Some(Status::parse(text).ok_or_else(|| invalid(format!("unknown status {text:?}")))?)
+        };
+        out.metas.push(IrMeta {
+            point_index: required(point_index, row, schema::POINT_INDEX, &location)?,
+            ix: required(ix, row, schema::IX, &location)?,
+            iy: required(iy, row, schema::IY, &location)?,
+            x_m: required(x_m, row, schema::X_M, &location)?,
+            y_m: required(y_m, row, schema::Y_M, &location)?,
+            actuator: required(actuator, row, schema::ACTUATOR, &location)?,
+            sample_rate_hz: required(sample_rate_hz, row, schema::SAMPLE_RATE_HZ, &location)?,
+            snr_db: optional(snr_db, row),
+            status,
+            retries: optional(retries, row),
+            measured_at_unix_us: optional(measured_at, row),
+        });
+        if ir.is_null(row) {
+            return Err(invalid("ir is null".into()));
+        }
+        // Arrow validated the offsets when it built the array; `get` keeps a bad one an error rather than a panic.
+        let bad_offsets = || invalid("ir offsets out of range".into());
+        let (start, end) = match ir_offsets.get(row..row + 2) {
+            Some(&[start, end]) => {
+                (usize::try_from(start).map_err(|_| bad_offsets())?, usize::try_from(end).map_err(|_| bad_offsets())?)
+            }
+            _ => return Err(bad_offsets()),
+        };
+        let samples = ir_values.values().get(start..end).ok_or_else(bad_offsets)?;
+        if ir_values.null_count() > 0 && (start..end).any(|i| ir_values.is_null(i)) {
+            return Err(invalid("ir holds a null sample".into()));
+        }
+        out.ir_values.extend_from_slice(samples);
+        out.ir_offsets.push(out.ir_values.len());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
+mod tests {
+    use super::*;
+    use crate::manifest::GridSpec;
+
+    fn records() -> Vec<IrRecord> {
+        let grid = GridSpec { nx: 2, ny: 2, spacing_m: 0.005, origin_x_m: 0.0, origin_y_m: 0.0 };
+        let mut first = IrMeta::at_grid(&grid, 1, 1, 7, 24_000.0).unwrap();
+        first.snr_db = Some(41.5);
+        first.status = Some(Status::ReMeasured);
+        first.retries = Some(2);
+        first.measured_at_unix_us = Some(1_767_225_600_000_000);
+        let second = IrMeta::at_grid(&grid, 0, 1, 0, 24_000.0).unwrap();
+        vec![
+            IrRecord { meta: first, ir: vec![1.5, -0.0, f32::MIN_POSITIVE / 2.0] },
+            IrRecord { meta: second, ir: vec![f32::MAX, f32::MIN, 3.25] },
+        ]
+    }
+
+    #[test]
+    fn parquet_round_trip_is_bit_exact() {
+        let records = records();
+        let mut bytes = Vec::new();
+        write_parquet(&mut bytes, &records, "t.parquet").unwrap();
+        let decoded = read_parquet(Bytes::from(bytes), "t.parquet").unwrap();
+        let back: Vec<IrRecord> = decoded.rows().map(|(meta, ir)| IrRecord { meta: *meta, ir: ir.to_vec() }).collect();
+        assert_eq!(back.len(), records.len());
+        for (a, b) in records.iter().zip(&back) {
+            assert_eq!(a.meta, b.meta);
+            // Compare bits: -0.0 and subnormals must survive, which `==` on f32 would not show.
+            let bits = |ir: &[f32]| ir.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a.ir), bits(&b.ir));
+        }
+    }
+
+    #[test]
+    fn a_file_without_a_column_is_a_schema_mismatch() {
+        let batch = to_record_batch(&records()).unwrap();
+        let without_ir = batch.project(&[0, 1, 2, 3, 4, 5, 6, 8, 9, 10, 11]).unwrap();
+        let mut bytes = Vec::new();
+        let mut writer = ArrowWriter::try_new(&mut bytes, without_ir.schema(), None).unwrap();
+        writer.write(&without_ir).unwrap();
+        writer.close().unwrap();
+        let err = read_parquet(Bytes::from(bytes), "t.parquet").unwrap_err();
+        assert!(matches!(err, StoreError::SchemaMismatch { ref reason, .. } if reason.contains("ir")), "{err}");
+    }
+
+    #[test]
+    fn garbage_is_a_parquet_error() {
+        let err = read_parquet(Bytes::from_static(b"not a parquet file at all"), "t.parquet").unwrap_err();
+        assert!(matches!(err, StoreError::Parquet { .. }), "{err}");
+        let err = read_parquet(Bytes::new(), "t.parquet").unwrap_err();
+        assert!(matches!(err, StoreError::Parquet { .. }), "{err}");
+    }
+}

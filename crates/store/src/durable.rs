@@ -1,0 +1,172 @@
+//! Durable file writes: a file appears under its final name complete, or not at all, and survives a power cut once
+//! the call returns.
+//!
+//! The sequence: write to a hidden temporary name in the same directory, fsync the file, rename it over the final
+//! name (atomic within one file system), fsync the directory (so that the rename itself is on disk).
+
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use crate::checksum::HashingWriter;
+use crate::error::StoreError;
+
+/// What a durable write produced.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Written {
+    /// File size, bytes.
+    pub size_bytes: u64,
+    /// Checksum of the file's bytes ([`crate::checksum`]).
+    pub checksum: String,
+}
+
+/// The writer handed to the closure of [`write_file`].
+pub(crate) type FileSink = HashingWriter<BufWriter<File>>;
+
+/// Suffix of temporary files; a leading dot also hides them from pyarrow's and polars' directory readers.
+pub(crate) const TEMP_SUFFIX: &str = ".tmp";
+
+/// The temporary name of `name`.
+pub(crate) fn temp_name(name: &str) -> String {
+    format!(".{name}{TEMP_SUFFIX}")
+}
+
+/// Writes `dir/name` durably with the bytes that `fill` writes, and returns their size and checksum.
+///
+/// A stale temporary file from an interrupted earlier write is overwritten. On error the temporary file is removed
+/// (best effort) and nothing appears under `name`.
+///
+/// # Errors
+/// [`StoreError::Io`] naming the step that failed, or whatever `fill` returns.
+pub(crate) fn write_file(
+    dir: &Path,
+    name: &str,
+    fill: impl FnOnce(&mut FileSink) -> Result<(), StoreError>,
+) -> Result<Written, StoreError> {
+    write_file_into(dir, dir, name, fill)
+}
+
+/// As [`write_file`], with the temporary file in `staging_dir` and the result in `target_dir` (the same file
+/// system): a directory of finished files then never holds a temporary one, which directory readers such as polars
+/// would trip over.
+///
+/// # Errors
+/// As [`write_file`].
+pub(crate) fn write_file_into(
+    staging_dir: &Path,
+    target_dir: &Path,
+    name: &str,
+    fill: impl FnOnce(&mut FileSink) -> Result<(), StoreError>,
+) -> Result<Written, StoreError> {
+    let temp = staging_dir.join(temp_name(name));
+    let result = write_temp_then_rename(&temp, &target_dir.join(name), fill);
+    if result.is_err() {
+        // Best effort: the error that matters is the one being returned; a leftover hidden file is harmless.
+        let _ = fs::remove_file(&temp);
+    }
+    let written = result?;
+    sync_dir(target_dir)?;
+    if staging_dir != target_dir {
+        // The temporary's name left the staging directory; make that durable too, so a crash cannot resurrect it.
+        sync_dir(staging_dir)?;
+    }
+    Ok(written)
+}
+
+fn write_temp_then_rename(
+    temp: &Path,
+    target: &Path,
+    fill: impl FnOnce(&mut FileSink) -> Result<(), StoreError>,
+) -> Result<Written, StoreError> {
+    let file = File::create(temp).map_err(StoreError::io("create", temp))?;
+    let mut sink = HashingWriter::new(BufWriter::new(file));
+    fill(&mut sink)?;
+    sink.flush().map_err(StoreError::io("write", temp))?;
+    let (buffered, checksum, size_bytes) = sink.finish();
+    let file =
+        buffered.into_inner().map_err(|e| StoreError::Io { op: "write", path: temp.into(), source: e.into() })?;
+    file.sync_all().map_err(StoreError::io("fsync", temp))?;
+    drop(file);
+    fs::rename(temp, target).map_err(StoreError::io("rename into place", target))?;
+    Ok(Written { size_bytes, checksum })
+}
+
+/// Makes the directory's entries (creations, renames, removals) durable.
+///
+/// # Errors
+/// [`StoreError::Io`] if the directory cannot be opened or synced.
+pub(crate) fn sync_dir(dir: &Path) -> Result<(), StoreError> {
+    #[cfg(unix)]
+    {
+        File::open(dir).and_then(|d| d.sync_all()).map_err(StoreError::io("fsync directory", dir))?;
+    }
+    // Elsewhere a directory cannot be opened as a file; NTFS journals its metadata, so the rename is durable anyway.
+    #[cfg(not(unix))]
+    let _ = dir;
+    Ok(())
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_the_bytes_and_leaves_no_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let written =
+            write_file(dir.path(), "a.bin", |w| w.write_all(b"hello").map_err(StoreError::io("write", "a.bin")))
+                .unwrap();
+        assert_eq!(fs::read(dir.path().join("a.bin")).unwrap(), b"hello");
+        assert_eq!(written, Written { size_bytes: 5, checksum: crate::checksum::sha256(b"hello") });
+        let names: Vec<_> = fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, ["a.bin"]);
+    }
+
+    #[test]
+    fn replaces_an_existing_file_atomically() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("m.json"), b"old").unwrap();
+        write_file(dir.path(), "m.json", |w| w.write_all(b"new").map_err(StoreError::io("write", "m.json"))).unwrap();
+        assert_eq!(fs::read(dir.path().join("m.json")).unwrap(), b"new");
+    }
+
+    #[test]
+    fn a_failing_fill_leaves_neither_target_nor_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("keep.json"), b"old").unwrap();
+        let err = write_file(dir.path(), "keep.json", |w| {
+            w.write_all(b"partial").map_err(StoreError::io("write", "keep.json"))?;
+            Err(StoreError::EmptyBatch)
+        })
+        .unwrap_err();
+        assert!(matches!(err, StoreError::EmptyBatch));
+        // The old content survives a failed replacement, and the half-written temporary is gone.
+        assert_eq!(fs::read(dir.path().join("keep.json")).unwrap(), b"old");
+        assert!(!dir.path().join(temp_name("keep.json")).exists());
+    }
+
+    #[test]
+    fn staging_in_another_directory_leaves_the_target_directory_clean() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("batches");
+        fs::create_dir(&target).unwrap();
+        let written = write_file_into(dir.path(), &target, "b.parquet", |w| {
+            w.write_all(b"data").map_err(StoreError::io("write", "b.parquet"))
+        })
+        .unwrap();
+        assert_eq!(written.size_bytes, 4);
+        assert_eq!(fs::read(target.join("b.parquet")).unwrap(), b"data");
+        let names = |d: &Path| fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name()).collect::<Vec<_>>();
+        assert_eq!(names(&target), ["b.parquet"]);
+        assert_eq!(names(dir.path()), ["batches"]);
+    }
+
+    #[test]
+    fn a_missing_directory_is_an_io_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("nope");
+        let err = write_file(&missing, "a", |_| Ok(())).unwrap_err();
+        assert!(matches!(err, StoreError::Io { op: "create", .. }), "{err}");
+    }
+}

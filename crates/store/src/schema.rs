@@ -1,0 +1,187 @@
+//! The columns of a batch file: one row per (grid point, actuator) impulse response.
+//!
+//! The schema is plain Arrow/Parquet so that pyarrow, polars and pandas read a batch file without our code. Each field
+//! carries its unit in the field metadata under the key `"unit"` (dimensionless columns carry none).
+//!
+//! | column | type | nullable | meaning |
+//! |---|---|---|---|
+//! | `point_index` | u32 | no | grid point index, `iy * nx + ix` |
+//! | `ix`, `iy` | u32 | no | grid column and row |
+//! | `x_m`, `y_m` | f64 | no | where the response was taken, m (plate coordinates) |
+//! | `actuator` | u16 | no | actuator number (audio interface channel, 0-based) |
+//! | `sample_rate_hz` | f64 | no | sample rate of `ir`, Hz; the same for every row of a dataset |
+//! | `ir` | list of f32 | no | impulse response, output per unit input (a scan: surface velocity in m/s per full-scale drive; the recipe in the manifest says) |
+//! | `snr_db` | f64 | yes | signal-to-noise ratio of the measurement, dB |
+//! | `status` | utf8 | yes | quality flag, one of [`Status`] |
+//! | `retries` | u32 | yes | how many times the point was re-measured |
+//! | `measured_at` | timestamp (µs, UTC) | yes | when the response was measured |
+
+use std::collections::HashMap;
+use std::sync::{Arc, LazyLock};
+
+use arrow_schema::{DataType, Field, Schema, SchemaRef, TimeUnit};
+
+/// Column `point_index`: grid point index `iy * nx + ix` (u32).
+pub const POINT_INDEX: &str = "point_index";
+/// Column `ix`: grid column, 0-based (u32).
+pub const IX: &str = "ix";
+/// Column `iy`: grid row, 0-based (u32).
+pub const IY: &str = "iy";
+/// Column `x_m`: x position of the point, m (f64).
+pub const X_M: &str = "x_m";
+/// Column `y_m`: y position of the point, m (f64).
+pub const Y_M: &str = "y_m";
+/// Column `actuator`: actuator number, 0-based (u16).
+pub const ACTUATOR: &str = "actuator";
+/// Column `sample_rate_hz`: sample rate of `ir`, Hz (f64).
+pub const SAMPLE_RATE_HZ: &str = "sample_rate_hz";
+/// Column `ir`: the impulse response (list of f32).
+pub const IR: &str = "ir";
+/// Column `snr_db`: signal-to-noise ratio, dB (f64, nullable).
+pub const SNR_DB: &str = "snr_db";
+/// Column `status`: quality flag (utf8, nullable; see [`Status`]).
+pub const STATUS: &str = "status";
+/// Column `retries`: re-measurements of the point (u32, nullable).
+pub const RETRIES: &str = "retries";
+/// Column `measured_at`: measurement time (timestamp in µs since the Unix epoch, UTC; nullable).
+pub const MEASURED_AT: &str = "measured_at";
+
+/// Name of the list items of the `ir` column (Arrow's default for a list).
+const IR_ITEM: &str = "item";
+
+/// Quality flag of one impulse response.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Status {
+    /// Measured, and within every quality limit.
+    Valid,
+    /// Measured again after a failed first attempt, and now valid.
+    ReMeasured,
+    /// The vibrometer or the DAQ clipped.
+    Overrange,
+    /// The signal dropped out (laser speckle, lost samples).
+    Dropout,
+    /// Every attempt failed; the response is kept only for diagnosis.
+    Failed,
+    /// Computed by the simulated plate, not measured.
+    GroundTruth,
+}
+
+impl Status {
+    /// Every status, in the order of the enum.
+    pub const ALL: [Status; 6] =
+        [Status::Valid, Status::ReMeasured, Status::Overrange, Status::Dropout, Status::Failed, Status::GroundTruth];
+
+    /// The string stored in the `status` column.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Valid => "valid",
+            Status::ReMeasured => "re-measured",
+            Status::Overrange => "overrange",
+            Status::Dropout => "dropout",
+            Status::Failed => "failed",
+            Status::GroundTruth => "ground-truth",
+        }
+    }
+
+    /// Parses a `status` column string; `None` if it is not one of [`Status::as_str`]'s values.
+    pub fn parse(s: &str) -> Option<Status> {
+        Status::ALL.into_iter().find(|status| status.as_str() == s)
+    }
+}
+
+/// A field with its unit in the metadata (none for dimensionless columns).
+fn field(name: &str, data_type: DataType, nullable: bool, unit: Option<&str>) -> Field {
+    let field = Field::new(name, data_type, nullable);
+    match unit {
+        Some(unit) => field.with_metadata(HashMap::from([("unit".to_string(), unit.to_string())])),
+        None => field,
+    }
+}
+
+/// The item field of the `ir` list: f32 samples, never null.
+pub(crate) fn ir_item_field() -> Field {
+    Field::new(IR_ITEM, DataType::Float32, false)
+}
+
+/// Time zone of the `measured_at` column.
+pub(crate) const MEASURED_AT_TZ: &str = "UTC";
+
+static SCHEMA: LazyLock<SchemaRef> = LazyLock::new(|| {
+    Arc::new(Schema::new(vec![
+        field(POINT_INDEX, DataType::UInt32, false, None),
+        field(IX, DataType::UInt32, false, None),
+        field(IY, DataType::UInt32, false, None),
+        field(X_M, DataType::Float64, false, Some("m")),
+        field(Y_M, DataType::Float64, false, Some("m")),
+        field(ACTUATOR, DataType::UInt16, false, None),
+        field(SAMPLE_RATE_HZ, DataType::Float64, false, Some("Hz")),
+        // No unit: it depends on the recipe (the manifest's configuration says what drives and what is measured).
+        field(IR, DataType::List(Arc::new(ir_item_field())), false, None),
+        field(SNR_DB, DataType::Float64, true, Some("dB")),
+        field(STATUS, DataType::Utf8, true, None),
+        field(RETRIES, DataType::UInt32, true, None),
+        field(MEASURED_AT, DataType::Timestamp(TimeUnit::Microsecond, Some(MEASURED_AT_TZ.into())), true, None),
+    ]))
+});
+
+/// The Arrow schema of every batch file (see the module documentation for each column's meaning and unit).
+pub fn arrow_schema() -> SchemaRef {
+    Arc::clone(&SCHEMA)
+}
+
+/// Whether `found` can be read as the column type `expected`: equal, except that a list's item field may have any
+/// name and nullability (pyarrow names it `element` when it rewrites a file; nulls are refused when decoding).
+pub(crate) fn compatible(expected: &DataType, found: &DataType) -> bool {
+    match (expected, found) {
+        (DataType::List(e), DataType::List(f)) => e.data_type() == f.data_type(),
+        _ => expected == found,
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
+mod tests {
+    use super::*;
+
+    #[test]
+    fn status_strings_round_trip_and_are_distinct() {
+        for status in Status::ALL {
+            assert_eq!(Status::parse(status.as_str()), Some(status));
+        }
+        let mut names: Vec<_> = Status::ALL.iter().map(|s| s.as_str()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), Status::ALL.len());
+        assert_eq!(Status::parse("Valid"), None, "status strings are case-sensitive");
+        assert_eq!(Status::parse(""), None);
+    }
+
+    #[test]
+    fn schema_has_the_documented_columns_and_units() {
+        let schema = arrow_schema();
+        let names: Vec<_> = schema.fields().iter().map(|f| f.name().as_str()).collect();
+        assert_eq!(
+            names,
+            [POINT_INDEX, IX, IY, X_M, Y_M, ACTUATOR, SAMPLE_RATE_HZ, IR, SNR_DB, STATUS, RETRIES, MEASURED_AT]
+        );
+        let unit = |name: &str| schema.field_with_name(name).ok().and_then(|f| f.metadata().get("unit").cloned());
+        assert_eq!(unit(X_M).as_deref(), Some("m"));
+        assert_eq!(unit(SAMPLE_RATE_HZ).as_deref(), Some("Hz"));
+        assert_eq!(unit(SNR_DB).as_deref(), Some("dB"));
+        // Keys and the response itself are required; the quality columns are filled only by scans.
+        for f in schema.fields() {
+            let optional = [SNR_DB, STATUS, RETRIES, MEASURED_AT].contains(&f.name().as_str());
+            assert_eq!(f.is_nullable(), optional, "{}", f.name());
+        }
+    }
+
+    #[test]
+    fn list_compatibility_ignores_item_name_only() {
+        let ours = DataType::List(Arc::new(ir_item_field()));
+        let pyarrow = DataType::List(Arc::new(Field::new("element", DataType::Float32, true)));
+        let wrong = DataType::List(Arc::new(Field::new("item", DataType::Float64, false)));
+        assert!(compatible(&ours, &pyarrow));
+        assert!(!compatible(&ours, &wrong));
+        assert!(!compatible(&DataType::UInt32, &DataType::UInt64));
+    }
+}
