@@ -1,0 +1,1 @@
+//! Cassette files (being written).

@@ -1,0 +1,1 @@
+//! DAQ USB bulk protocol (being written).

@@ -1,0 +1,1 @@
+//! LDV controller protocol (being written).
