@@ -5,6 +5,8 @@
 use clap::{Parser, Subcommand};
 
 mod scene;
+mod progress;
+mod simulate;
 mod sweep;
 mod wav;
 
@@ -25,6 +27,11 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// List the built-in scenes, or show one (or a scene file) fully resolved.
     Scene(scene::SceneArgs),
+    /// The simulated plate's ground truth: dispersion, Green's functions.
+    Simulate {
+        #[command(subcommand)]
+        command: simulate::SimulateCommand,
+    },
 }
 
 fn main() -> anyhow::Result<()> {
@@ -32,5 +39,6 @@ fn main() -> anyhow::Result<()> {
     match cli.command {
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
+        Command::Simulate { command } => simulate::run(&command),
     }
 }
