@@ -1,0 +1,136 @@
+//! On-disk cache of Green's functions, keyed by the scene's content hash, the model options and the request.
+//!
+//! Where: only in a directory the caller passes (nothing is written otherwise), one file per key,
+//! `greens-<scene hash>-<request key>.bin` (both 16 hex digits). Format (little-endian): magic `MPGREEN1`, key u64,
+//! sample rate f64, ir_len u64, point count u64, actuator count u64, the point and actuator indices (u64 each), then
+//! the samples (f64). A file is written to a temporary name and renamed, so a reader never sees half a file; a file
+//! whose header does not match the request, is truncated, or holds a non-finite sample is ignored and recomputed.
+
+use std::fs;
+use std::io::{ErrorKind, Write};
+use std::path::{Path, PathBuf};
+
+use metaplate_core::scene::Scene;
+
+use crate::error::PlateError;
+use crate::greens::{GreensFunctions, GreensRequest};
+use crate::model::{ModelOptions, PlateModel};
+
+const MAGIC: &[u8; 8] = b"MPGREEN1";
+
+/// Bumped whenever the model's numerics change, so stale caches are not reused.
+const MODEL_VERSION: u64 = 1;
+
+/// FNV-1a over bytes: stable across machines, runs and Rust versions.
+fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+/// Cache key of a request on a scene (by hash) with given options. The thread count is left out: results do not
+/// depend on it.
+pub fn cache_key(scene_hash: u64, options: &ModelOptions, request: &GreensRequest) -> u64 {
+    let words = [MODEL_VERSION, scene_hash, options.refinement as u64]
+        .into_iter()
+        .chain([request.band_hz.0, request.band_hz.1, request.duration_s, request.sample_rate_hz].map(f64::to_bits))
+        .chain([request.points.len() as u64])
+        .chain(request.points.iter().map(|&p| p as u64))
+        .chain([request.actuators.len() as u64])
+        .chain(request.actuators.iter().map(|&a| a as u64));
+    fnv1a(words.flat_map(u64::to_le_bytes))
+}
+
+/// Path of the cache file for a key.
+pub fn cache_path(dir: &Path, scene_hash: u64, key: u64) -> PathBuf {
+    dir.join(format!("greens-{scene_hash:016x}-{key:016x}.bin"))
+}
+
+/// Green's functions of `scene` for `request`, from `cache_dir` when a matching file is there, otherwise computed
+/// (see [`PlateModel::greens_functions`]) and, with a cache directory, stored there.
+///
+/// # Errors
+/// As [`PlateModel::from_scene`] and [`PlateModel::greens_functions`]; [`PlateError::Cache`] when the cache
+/// directory cannot be read or written.
+pub fn greens_functions(
+    scene: &Scene,
+    options: &ModelOptions,
+    request: &GreensRequest,
+    cache_dir: Option<&Path>,
+) -> Result<GreensFunctions, PlateError> {
+    let scene_hash = scene.content_hash();
+    let path = cache_dir.map(|dir| cache_path(dir, scene_hash, cache_key(scene_hash, options, request)));
+    if let Some(path) = &path
+        && let Some(hit) = load(path, cache_key(scene_hash, options, request), request)?
+    {
+        return Ok(hit);
+    }
+    let greens = PlateModel::from_scene(scene, options)?.greens_functions(request)?;
+    if let Some(path) = &path {
+        store(path, cache_key(scene_hash, options, request), &greens)?;
+    }
+    Ok(greens)
+}
+
+fn cache_error(path: &Path, e: impl ToString) -> PlateError {
+    PlateError::Cache { path: path.display().to_string(), reason: e.to_string() }
+}
+
+/// Reads a cache file; `Ok(None)` when it is absent or does not match.
+fn load(path: &Path, key: u64, request: &GreensRequest) -> Result<Option<GreensFunctions>, PlateError> {
+    let bytes = match fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(cache_error(path, e)),
+    };
+    Ok(parse(&bytes, key, request))
+}
+
+fn parse(bytes: &[u8], key: u64, request: &GreensRequest) -> Option<GreensFunctions> {
+    let mut words =
+        bytes.get(MAGIC.len()..)?.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])));
+    if bytes.get(..MAGIC.len())? != MAGIC || words.next()? != key {
+        return None;
+    }
+    let sample_rate_hz = f64::from_bits(words.next()?);
+    let ir_len = usize::try_from(words.next()?).ok()?;
+    let n_points = usize::try_from(words.next()?).ok()?;
+    let n_act = usize::try_from(words.next()?).ok()?;
+    if sample_rate_hz != request.sample_rate_hz || n_points != request.points.len() || n_act != request.actuators.len()
+    {
+        return None;
+    }
+    let points: Vec<usize> = (0..n_points).map(|_| words.next().map(|w| w as usize)).collect::<Option<_>>()?;
+    let actuators: Vec<usize> = (0..n_act).map(|_| words.next().map(|w| w as usize)).collect::<Option<_>>()?;
+    if points != request.points || actuators != request.actuators {
+        return None;
+    }
+    let data: Vec<f64> = words.map(f64::from_bits).collect();
+    if data.len() != n_points.checked_mul(n_act)?.checked_mul(ir_len)? || !data.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    Some(GreensFunctions { sample_rate_hz, ir_len, points, actuators, data })
+}
+
+/// Writes a cache file atomically (temporary file, then rename).
+fn store(path: &Path, key: u64, g: &GreensFunctions) -> Result<(), PlateError> {
+    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        let mut out = std::io::BufWriter::new(fs::File::create(&tmp)?);
+        out.write_all(MAGIC)?;
+        let header =
+            [key, g.sample_rate_hz.to_bits(), g.ir_len as u64, g.points.len() as u64, g.actuators.len() as u64];
+        for w in
+            header.into_iter().chain(g.points.iter().map(|&p| p as u64)).chain(g.actuators.iter().map(|&a| a as u64))
+        {
+            out.write_all(&w.to_le_bytes())?;
+        }
+        for v in &g.data {
+            out.write_all(&v.to_le_bytes())?;
+        }
+        out.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        fs::rename(&tmp, path)
+    };
+    write().map_err(|e| {
+        let _ = fs::remove_file(&tmp);
+        cache_error(path, e)
+    })
+}

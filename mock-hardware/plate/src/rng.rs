@@ -1,0 +1,64 @@
+//! A tiny deterministic random source (SplitMix64), so that a scene and its seed give bit-identical draws on every
+//! platform and with every dependency version.
+
+/// SplitMix64 (Steele, Lea & Flood 2014): a 64-bit state, one multiply-xorshift output per step.
+#[derive(Debug, Clone)]
+pub(crate) struct SplitMix64(u64);
+
+impl SplitMix64 {
+    /// A stream for `seed`, separated from other streams of the same seed by `stream` (any constant).
+    pub fn new(seed: u64, stream: u64) -> Self {
+        let mut s = Self(seed ^ stream.wrapping_mul(0xD1B5_4A32_D192_ED03));
+        s.next_u64();
+        s
+    }
+
+    /// Next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in (0, 1): 53 random bits, never exactly 0.
+    pub fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    /// Standard normal (Box-Muller; one of the pair is discarded to keep the stream simple).
+    pub fn normal(&mut self) -> f64 {
+        let (u1, u2) = (self.uniform(), self.uniform());
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reproducible_and_roughly_standard() {
+        let a: Vec<u64> = (0..4)
+            .map({
+                let mut r = SplitMix64::new(7, 1);
+                move |_| r.next_u64()
+            })
+            .collect();
+        let b: Vec<u64> = (0..4)
+            .map({
+                let mut r = SplitMix64::new(7, 1);
+                move |_| r.next_u64()
+            })
+            .collect();
+        assert_eq!(a, b);
+        let mut r = SplitMix64::new(7, 2);
+        let n = 20_000;
+        let x: Vec<f64> = (0..n).map(|_| r.normal()).collect();
+        let mean = x.iter().sum::<f64>() / n as f64;
+        let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64;
+        // Standard errors at n = 20000: 0.007 on the mean, 0.01 on the variance; 5 sigma bounds.
+        assert!(mean.abs() < 0.035 && (var - 1.0).abs() < 0.05, "mean {mean} var {var}");
+    }
+}
