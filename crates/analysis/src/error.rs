@@ -52,6 +52,16 @@ pub enum AnalysisError {
         /// Which analysis.
         what: &'static str,
     },
+    /// The field does not behave as one propagating plate wave over the points used, so no wavelength follows from
+    /// the plate equation: its quotient `Re k^4` is zero or negative (a static or rigid-body field, one dominated by
+    /// evanescent or band-gap waves), or beyond what the grid can sample (shorter than two grid steps).
+    #[error("{what}: {reason}")]
+    NotAPlateWave {
+        /// Which analysis.
+        what: &'static str,
+        /// What was found.
+        reason: String,
+    },
     /// A size would need more memory than the routine allows.
     #[error("{what} needs {len} elements, more than the limit of {max}")]
     TooLarge {

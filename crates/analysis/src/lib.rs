@@ -2,11 +2,14 @@
 //!
 //! [`wavelength`]: plate wavelengths from a k-space (2-D spatial Fourier) transform of the Green's functions at one
 //! frequency, as in the paper's Wave Field Analysis, with per-actuator estimates summarised across actuators.
-//! (POD, singular-value authority, pixel area and refresh rate will join it.)
+//! [`wavelength::local`]: the plate-equation (biharmonic Rayleigh quotient) wavelength, free of the k-space
+//! method's aperture limit. [`dispersion`]: both, for every actuator's field at one frequency, from a propagation
+//! response. (POD, singular-value authority, pixel area and refresh rate will join them.)
 //!
 //! Every public routine checks its input: an empty or mismatched input, a NaN or infinity, or a parameter outside the
 //! routine's stated valid range is an [`AnalysisError`], never a panic and never a NaN in the result.
 
+pub mod dispersion;
 pub mod error;
 pub mod wavelength;
 

@@ -1,42 +1,45 @@
-//! Wavelengths of the simulated plates, measured from their fields with the analysis crate's k-space estimator.
+//! Wavelengths of the simulated plates, measured from their fields with the analysis crate's two estimators: the
+//! paper's k-space method and the plate-equation (biharmonic Rayleigh quotient) estimator, which no aperture limits.
+//!
+//! The figures behind the tolerances print with
+//! `cargo test -p metaplate-plate --test dispersion -- --nocapture`.
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
-use metaplate_analysis::wavelength::{KSpaceOptions, estimate_wavelength};
+use std::f64::consts::PI;
+
+use metaplate_analysis::dispersion::{DispersionOptions, FrequencyWavelengths, SceneLayout, wavelengths_at};
 use metaplate_core::scene::Scene;
 use metaplate_plate::{ModelOptions, PlateModel};
-use num_complex::Complex64;
 
-/// Per actuator, the median k-space wavelength (m) of the field at `freq_hz` over the scene's measured points.
-fn wavelengths(scene: &Scene, model: &PlateModel, freq_hz: f64) -> Vec<f64> {
-    let points = scene.measured_points();
-    let mask = scene.grid_mask();
+/// The band of the issue, at 8 frequencies.
+const FREQS_HZ: [f64; 8] = [75.0, 100.0, 150.0, 200.0, 300.0, 400.0, 500.0, 600.0];
+
+/// Both estimators at `freq_hz` for every actuator of `scene`.
+fn wavelengths(scene: &Scene, model: &PlateModel, freq_hz: f64) -> FrequencyWavelengths {
+    let layout = SceneLayout::new(scene);
     let actuators: Vec<usize> = (0..scene.actuators.len()).collect();
-    let response = model.frequency_response(freq_hz, &actuators, &points).unwrap();
-    actuators
-        .iter()
-        .map(|&a| {
-            let mut field = vec![Complex64::new(0.0, 0.0); scene.grid.len()];
-            for (k, &p) in points.iter().enumerate() {
-                field[p] = response[k * actuators.len() + a];
-            }
-            let (g, opts) = (&scene.grid, KSpaceOptions::default());
-            estimate_wavelength(&field, &mask, g.nx, g.ny, g.spacing_m, &opts).unwrap().median_m
-        })
-        .collect()
+    let response = model.frequency_response(freq_hz, &actuators, &layout.points).unwrap();
+    wavelengths_at(&response, actuators.len(), &layout.layout(), &DispersionOptions::default()).unwrap()
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 { v[n / 2] } else { (v[n / 2 - 1] + v[n / 2]) / 2.0 }
+/// The k-space median over actuators, the paper's figure.
+fn k_space_median(scene: &Scene, model: &PlateModel, freq_hz: f64) -> f64 {
+    wavelengths(scene, model, freq_hz).k_space_summary.median_m
+}
+
+/// The plate-equation median over actuators; every actuator must have given an estimate.
+fn local_median(w: &FrequencyWavelengths) -> f64 {
+    let summary = w.local_summary.unwrap();
+    assert_eq!(summary.actuators, w.local.len(), "an actuator gave no plate-equation estimate: {:?}", w.local);
+    summary.wavelength_m
 }
 
 #[test]
 fn metamaterial_matches_the_papers_wavelengths_and_is_monotonic() {
     let scene = Scene::builtin("metamaterial").unwrap();
     let model = PlateModel::from_scene(&scene, &ModelOptions::default()).unwrap();
-    let freqs = [75.0, 100.0, 150.0, 200.0, 300.0, 400.0, 500.0, 600.0];
-    let lambdas: Vec<f64> = freqs.iter().map(|&f| median(wavelengths(&scene, &model, f))).collect();
+    let freqs = FREQS_HZ;
+    let lambdas: Vec<f64> = freqs.iter().map(|&f| k_space_median(&scene, &model, f)).collect();
     // The issue's tolerance: within 15 % of the paper's measured 11.3 cm at 75 Hz and 2.5 cm at 600 Hz.
     assert!((lambdas[0] / 0.113 - 1.0).abs() < 0.15, "75 Hz: {} m", lambdas[0]);
     assert!((lambdas[7] / 0.025 - 1.0).abs() < 0.15, "600 Hz: {} m", lambdas[7]);
@@ -51,6 +54,91 @@ fn metamaterial_matches_the_papers_wavelengths_and_is_monotonic() {
 }
 
 #[test]
+fn homogeneous_matches_analytic_a0_within_5_percent() {
+    let scene = Scene::builtin("homogeneous").unwrap();
+    let model = PlateModel::from_scene(&scene, &ModelOptions::default()).unwrap();
+    let aperture_m = scene.grid.nx.max(scene.grid.ny) as f64 * scene.grid.spacing_m;
+    println!(
+        "{:>6} {:>9} {:>9} {:>9} {:>8} {:>8} {:>7}",
+        "f Hz", "A0 cm", "local cm", "k cm", "local %", "k %", "flagged"
+    );
+    for f in FREQS_HZ {
+        let a0 = scene.plate.a0_wavelength_m(f).unwrap();
+        let w = wavelengths(&scene, &model, f);
+        let local = local_median(&w);
+        let k = &w.k_space_summary;
+        println!(
+            "{f:>6} {:>9.3} {:>9.3} {:>9.3} {:>+8.2} {:>+8.2} {:>7}",
+            a0 * 100.0,
+            local * 100.0,
+            k.median_m * 100.0,
+            (local / a0 - 1.0) * 100.0,
+            (k.median_m / a0 - 1.0) * 100.0,
+            k.flagged
+        );
+        // The issue's requirement, on the plate-equation estimate (measured: within 0.25 % over the band).
+        assert!((local / a0 - 1.0).abs() < 0.05, "{f} Hz: local {local} m, A0 {a0} m");
+        for e in w.local.iter().map(|r| r.as_ref().unwrap()) {
+            // Every actuator's field: inside the estimator's range (9 cm at 600 Hz is 18 grid steps), and obeying
+            // one plate equation where it is measured: residual 0.035 at most over the band, against 0.8 to 0.99
+            // with no actuator exclusion (the near field then in the sums); 0.1 separates the two.
+            assert!(e.flags.in_range(), "{f} Hz: {e:?}");
+            assert!(e.residual < 0.1, "{f} Hz: {e:?}");
+            assert!((e.wavelength_m / a0 - 1.0).abs() < 0.05, "{f} Hz: {e:?}");
+        }
+        // For the record, the paper's k-space method on the same fields: where A0 exceeds 0.6 L it reads at least
+        // 4 % short (its documented bias, `metaplate_analysis::wavelength`), so above L / 2: every actuator is
+        // flagged under-resolved. Across the band it stays within 20 % of A0, its documented bias at L, but it is
+        // not within 5 %: it misses A0 by 8 to 16 % at most frequencies (the table above).
+        if a0 > 0.6 * aperture_m {
+            assert!(w.k_space.iter().all(|e| e.flags.under_resolved), "{f} Hz: {:?}", w.k_space);
+        }
+        assert!((k.median_m / a0 - 1.0).abs() < 0.20, "{f} Hz: k-space {} m, A0 {a0} m", k.median_m);
+    }
+}
+
+#[test]
+fn metamaterial_plate_equation_matches_the_homogenised_dispersion() {
+    // The rods, homogenised, are a resonant added mass: D k^4 = rho h w^2 [1 + mu w_r^2 / (w_r^2 - w^2)]
+    // (`metaplate_plate` resonators docs), so the metamaterial obeys one plate equation with an effective mass and
+    // its wavelength is A0's divided by that bracket to the 1/4.
+    let scene = Scene::builtin("metamaterial").unwrap();
+    let options = ModelOptions::default();
+    let model = PlateModel::from_scene(&scene, &options).unwrap();
+    let (mu, f_r) = metaplate_plate::effective_parameters(&scene).unwrap();
+    let lattice_m = scene.grid.spacing_m / options.refinement as f64;
+    println!("{:>6} {:>9} {:>9} {:>9} {:>8} {:>8}", "f Hz", "eff cm", "local cm", "k cm", "local %", "k/local %");
+    for f in FREQS_HZ {
+        let effective =
+            scene.plate.a0_wavelength_m(f).unwrap() / (1.0 + mu * f_r * f_r / (f_r * f_r - f * f)).powf(0.25);
+        let w = wavelengths(&scene, &model, f);
+        let local = local_median(&w);
+        let k_space = w.k_space_summary.median_m;
+        println!(
+            "{f:>6} {:>9.3} {:>9.3} {:>9.3} {:>+8.2} {:>+8.2}",
+            effective * 100.0,
+            local * 100.0,
+            k_space * 100.0,
+            (local / effective - 1.0) * 100.0,
+            (k_space / local - 1.0) * 100.0
+        );
+        let summary = w.local_summary.unwrap();
+        if summary.flagged > 0 {
+            // 600 Hz: 2.5 cm is under 6 grid steps, outside the estimator's stated range, and it says so.
+            assert!(local < 6.0 * scene.grid.spacing_m, "{f} Hz: flagged at {local} m");
+            continue;
+        }
+        // Tolerance: the model's own discretisation reads wavelengths short by (k h_lattice)^2 / 24 (its
+        // documentation), the estimator's stencil leaves up to (k h)^2 / 96 by direction (`wavelength::local`),
+        // and 0.5 % covers what the formula leaves out (the rods' 1 % height spread and their own loss, the
+        // rod-free 1 cm strip along the edge that some stencils reach). Measured: within 0.7 % up to 500 Hz.
+        let k = 2.0 * PI / effective;
+        let tolerance = (k * lattice_m).powi(2) / 24.0 + (k * scene.grid.spacing_m).powi(2) / 96.0 + 0.005;
+        assert!((local / effective - 1.0).abs() < tolerance, "{f} Hz: local {local} m, homogenised {effective} m");
+    }
+}
+
+#[test]
 fn rocking_rods_slow_waves_more_than_the_same_rods_as_added_mass() {
     // Rocking rods add rotary inertia J = m L^2 / 3 on top of the rods' mass, a term -w^2 J laplacian(w) that
     // shortens waves further; with the rods' own (derived) parameters both models run, and rocking is shorter.
@@ -61,7 +149,7 @@ fn rocking_rods_slow_waves_more_than_the_same_rods_as_added_mass() {
     let mut rocking = added.clone();
     rocking.resonators.model = ResonatorModel::RockingRod;
     let options = ModelOptions { refinement: 2, threads: 1 };
-    let l_added = median(wavelengths(&added, &PlateModel::from_scene(&added, &options).unwrap(), 300.0));
-    let l_rocking = median(wavelengths(&rocking, &PlateModel::from_scene(&rocking, &options).unwrap(), 300.0));
+    let l_added = k_space_median(&added, &PlateModel::from_scene(&added, &options).unwrap(), 300.0);
+    let l_rocking = k_space_median(&rocking, &PlateModel::from_scene(&rocking, &options).unwrap(), 300.0);
     assert!(l_rocking < l_added, "rocking {l_rocking} m, added mass {l_added} m");
 }

@@ -23,18 +23,24 @@
 //!   10, 15, 25 cm, with mean bias -2 % at 15 cm and -18 % at 25 cm.
 //!   The table and the command that reproduces it are in `tests/wavelength_bias.rs`.
 //!
+//! Because of that bias, a second estimator that no aperture limits sits beside it: [`local`], the plate equation's
+//! biharmonic Rayleigh quotient ([`estimate_local_wavelength`]), exact in principle for any wavelength in a
+//! source-free region of one medium, but sensitive to noise at long wavelengths (see its documentation).
+//!
 //! Cost: one complex 2-D FFT of `m` x `m` bins with `m = fast_len(zero_pad_factor * max(nx, ny))` (392 x 392 for the
 //! 49 x 25 grid padded x8 by default: about 3 M complex multiply-adds, well under 10 ms) plus a few passes over those bins.
 
 mod aperture;
 mod contour;
+pub mod local;
 mod radial;
 mod region;
 mod spectrum;
-mod stats;
+pub(crate) mod stats;
 mod summary;
 
 pub use aperture::{MAX_POINTS, MAX_SPACING_M, MIN_SPACING_M};
+pub use local::{Exclusion, LocalEstimate, LocalFlags, LocalOptions, StencilCorrection, estimate_local_wavelength};
 pub use spectrum::MAX_K_BINS;
 pub use summary::{AcrossActuators, WavelengthSummary, summarise};
 
