@@ -5,6 +5,7 @@
 use clap::{Parser, Subcommand};
 
 mod scene;
+mod demo;
 mod progress;
 mod simulate;
 mod sweep;
@@ -23,6 +24,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job: run the suite end to end on the built-in simulated plates and print the paper-against-suite
+    /// table.
+    Demo(demo::DemoArgs),
     /// Write an excitation sweep (the paper's by default) as a 32-bit float WAV file.
     Sweep(sweep::SweepArgs),
     /// List the built-in scenes, or show one (or a scene file) fully resolved.
@@ -37,6 +41,7 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
+        Command::Demo(args) => demo::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Simulate { command } => simulate::run(&command),

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
-use metaplate_analysis::wavelength::{AcrossActuators, KSpaceOptions, WavelengthEstimate, estimate_wavelength, summarise};
+use metaplate_analysis::dispersion::{DispersionOptions, SceneLayout, wavelengths_at};
 use metaplate_core::scene::Scene;
 use metaplate_plate::{GreensFunctions, GreensRequest, ModelOptions, PlateModel};
 use metaplate_store::{DatasetMeta, DatasetWriter, IfExists, IrMeta, IrRecord, SceneId, Status};
@@ -156,37 +156,30 @@ pub fn select_points(scene: &Scene, grid: Option<(usize, usize)>) -> anyhow::Res
     Ok(points)
 }
 
-/// Per-frequency wavelength report of a scene (see `metaplate simulate dispersion`).
+/// Per-frequency wavelength report of a scene (see `metaplate simulate dispersion`): the paper's k-space method
+/// (`wavelength_m`, median over actuators, with its interquartile range and how many actuators' estimates fall outside
+/// the method's resolved range), and the plate-equation estimate (`local_wavelength_m`), which resolves wavelengths as
+/// long as the plate where the aperture-limited k-space method cannot.
 pub fn dispersion(scene: &Scene, options: &ModelOptions, freqs: &[f64]) -> anyhow::Result<Value> {
     let model = PlateModel::from_scene(scene, options).context("discretising the plate")?;
-    let points = scene.measured_points();
-    let mask = scene.grid_mask();
+    let layout = SceneLayout::new(scene);
     let actuators: Vec<usize> = (0..scene.actuators.len()).collect();
     let bar = progress::bar(freqs.len() as u64, "dispersion");
     let mut rows = Vec::with_capacity(freqs.len());
     for &f in freqs {
-        let response = model.frequency_response(f, &actuators, &points)?;
-        let estimates: Vec<WavelengthEstimate> = actuators
-            .iter()
-            .map(|&a| {
-                let mut field = vec![num_complex::Complex64::new(0.0, 0.0); scene.grid.len()];
-                for (k, &p) in points.iter().enumerate() {
-                    field[p] = response[k * actuators.len() + a];
-                }
-                let g = &scene.grid;
-                estimate_wavelength(&field, &mask, g.nx, g.ny, g.spacing_m, &KSpaceOptions::default())
-            })
-            .collect::<Result<_, _>>()?;
-        let summary = summarise(&estimates, AcrossActuators::Median)?;
+        let response = model.frequency_response(f, &actuators, &layout.points)?;
+        let w = wavelengths_at(&response, actuators.len(), &layout.layout(), &DispersionOptions::default())?;
         let a0 = scene.plate.a0_wavelength_m(f)?;
+        let summary = &w.k_space_summary;
         rows.push(json!({
             "freq_hz": f,
             "wavelength_m": summary.median_m,
             "iqr_m": [summary.iqr_m.0, summary.iqr_m.1],
+            "actuators_flagged": summary.flagged,
+            "per_actuator_m": w.k_space.iter().map(|e| e.median_m).collect::<Vec<_>>(),
+            "local_wavelength_m": w.local_summary.as_ref().map(|l| l.wavelength_m),
             "a0_wavelength_m": a0,
             "a0_over_wavelength": a0 / summary.median_m,
-            "per_actuator_m": estimates.iter().map(|e| e.median_m).collect::<Vec<_>>(),
-            "actuators_flagged": summary.flagged,
         }));
         bar.inc(1);
     }
@@ -194,19 +187,21 @@ pub fn dispersion(scene: &Scene, options: &ModelOptions, freqs: &[f64]) -> anyho
     Ok(json!({
         "scene": scene.name,
         "scene_hash": format!("{:016x}", scene.content_hash()),
-        "method": "k-space: 2-D FFT of the field over the measured grid, half-maximum region around the peak, median over actuators",
+        "method": "k-space (the paper's): 2-D FFT of each actuator's field over the measured grid, half-maximum region \
+                   around the peak, median over actuators; local: plate-equation (biharmonic Rayleigh quotient) estimate",
         "points": rows,
     }))
 }
 
 fn print_dispersion(report: &Value) {
-    println!("{:>8}  {:>10}  {:>10}  {:>8}  flagged", "f (Hz)", "lambda (cm)", "A0 (cm)", "A0/lambda");
+    println!("{:>8}  {:>11}  {:>11}  {:>10}  {:>9}  k-space flagged", "f (Hz)", "k-space (cm)", "local (cm)", "A0 (cm)", "A0/k-space");
     for p in report["points"].as_array().into_iter().flatten() {
         let cm = |k: &str| p[k].as_f64().unwrap_or(f64::NAN) * 100.0;
         println!(
-            "{:>8.1}  {:>10.2}  {:>10.2}  {:>8.2}  {}",
+            "{:>8.1}  {:>11.2}  {:>11.2}  {:>10.2}  {:>9.2}  {}",
             p["freq_hz"].as_f64().unwrap_or(f64::NAN),
             cm("wavelength_m"),
+            cm("local_wavelength_m"),
             cm("a0_wavelength_m"),
             p["a0_over_wavelength"].as_f64().unwrap_or(f64::NAN),
             p["actuators_flagged"]

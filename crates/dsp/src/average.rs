@@ -1,1 +1,308 @@
-//! (being written)
+//! Coherent averaging of repetitions, and the signal-to-noise ratio their spread reveals.
+//!
+//! The repetitions of a measurement carry the same signal and independent noise. Their (weighted) mean keeps the
+//! signal and divides the noise power by the total weight; the spread of the repetitions around the mean measures
+//! that noise without knowing the signal.
+//!
+//! Estimator, for `K` repetitions `x_k` with weights `w_k` proportional to the inverse of their noise variance
+//! (equal weights when all have the same noise):
+//! - mean `m = sum_k w_k x_k / W`, with `W = sum_k w_k`;
+//! - noise energy of one unit-weight repetition `s2 = sum_k w_k |x_k - m|^2 / (K - 1)` (unbiased for independent
+//!   zero-mean noise; needs `K >= 2`, with `K = 1` there is no spread and no estimate);
+//! - noise energy left in the mean `s2 / W`; signal energy of the mean `|m|^2 - s2 / W` (the noise bias removed,
+//!   floored at zero); SNR of the mean = signal energy / noise energy.
+//!
+//! `|.|^2` sums over the samples, each weighted by an optional per-sample gain squared (a band limit on spectra).
+
+use std::ops::{Add, Mul, Sub};
+
+use num_complex::Complex64;
+
+use crate::error::DspError;
+
+/// A coherent average and, from two repetitions on, the noise and signal energies estimated from the spread.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Average<T> {
+    /// The weighted mean of the repetitions, sample by sample.
+    pub mean: Vec<T>,
+    /// Noise energy left in the mean (sum over samples of gain^2 |noise|^2); `None` with a single repetition.
+    pub noise_energy: Option<f64>,
+    /// Signal energy of the mean with the noise bias removed, floored at 0; `None` with a single repetition.
+    pub signal_energy: Option<f64>,
+}
+
+impl<T> Average<T> {
+    /// SNR of the mean, dB: signal energy over noise energy.
+    ///
+    /// `None` when it cannot be estimated: a single repetition (no spread), identical repetitions (no noise seen, the
+    /// SNR is unbounded), or no signal above the noise bias (the SNR is below what the spread can resolve).
+    pub fn snr_db(&self) -> Option<f64> {
+        match (self.signal_energy, self.noise_energy) {
+            (Some(s), Some(n)) if s > 0.0 && n > 0.0 => Some(10.0 * (s / n).log10()),
+            _ => None,
+        }
+    }
+}
+
+/// Plain mean of equally noisy repetitions of a real signal. See [`weighted_average`].
+///
+/// # Errors
+/// As [`weighted_average`].
+pub fn average(repetitions: &[&[f64]]) -> Result<Average<f64>, DspError> {
+    weighted_average(repetitions, &vec![1.0; repetitions.len()])
+}
+
+/// Weighted mean of repetitions of a real signal, with the noise and signal energies estimated from their spread
+/// (see the module documentation for the estimator).
+///
+/// Valid range: at least one repetition, all of the same non-zero length and finite; one weight per repetition,
+/// finite and positive (proportional to the inverse of the repetition's noise variance). The energies must stay
+/// below f64 overflow (samples below about 1e150).
+///
+/// # Errors
+/// [`DspError::Empty`] (no repetition, or empty ones), [`DspError::LengthMismatch`] (lengths differ, or the weight
+/// count differs from the repetition count), [`DspError::NonFinite`], [`DspError::InvalidParameter`] (a weight not
+/// finite and positive), [`DspError::NonFiniteResult`] (overflow).
+pub fn weighted_average(repetitions: &[&[f64]], weights: &[f64]) -> Result<Average<f64>, DspError> {
+    average_impl(repetitions, weights, None)
+}
+
+/// Weighted mean of the spectra of repetitions, with the noise and signal energies estimated from their spread,
+/// counting each bin with `bin_gains[b]^2` (a band limit) or 1 when `bin_gains` is `None`.
+///
+/// Valid range: as [`weighted_average`]; `bin_gains`, when given, has one finite gain `>= 0` per bin.
+///
+/// # Errors
+/// As [`weighted_average`]; [`DspError::LengthMismatch`] or [`DspError::InvalidParameter`] for bad `bin_gains`.
+pub fn average_spectra(
+    spectra: &[&[Complex64]],
+    weights: &[f64],
+    bin_gains: Option<&[f64]>,
+) -> Result<Average<Complex64>, DspError> {
+    average_impl(spectra, weights, bin_gains)
+}
+
+/// What the averaging needs of a sample: arithmetic, its power, and a finiteness check.
+trait Sample: Copy + Default + Add<Output = Self> + Sub<Output = Self> + Mul<f64, Output = Self> {
+    fn power(self) -> f64;
+    fn is_finite(self) -> bool;
+}
+
+impl Sample for f64 {
+    fn power(self) -> f64 {
+        self * self
+    }
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+}
+
+impl Sample for Complex64 {
+    fn power(self) -> f64 {
+        self.norm_sqr()
+    }
+    fn is_finite(self) -> bool {
+        self.re.is_finite() && self.im.is_finite()
+    }
+}
+
+fn average_impl<T: Sample>(
+    repetitions: &[&[T]],
+    weights: &[f64],
+    bin_gains: Option<&[f64]>,
+) -> Result<Average<T>, DspError> {
+    let n = check_repetitions(repetitions)?;
+    if weights.len() != repetitions.len() {
+        return Err(DspError::LengthMismatch {
+            what: "weights against repetitions",
+            a: weights.len(),
+            b: repetitions.len(),
+        });
+    }
+    if let Some(i) = weights.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
+        return Err(DspError::InvalidParameter {
+            name: "weights",
+            reason: format!("must be finite and positive, got {} for repetition {i}", weights[i]),
+        });
+    }
+    if let Some(gains) = bin_gains {
+        if gains.len() != n {
+            return Err(DspError::LengthMismatch { what: "bin gains against samples", a: gains.len(), b: n });
+        }
+        if let Some(i) = gains.iter().position(|g| !(g.is_finite() && *g >= 0.0)) {
+            return Err(DspError::InvalidParameter {
+                name: "bin_gains",
+                reason: format!("must be finite and >= 0, got {} at bin {i}", gains[i]),
+            });
+        }
+    }
+    let total_weight: f64 = weights.iter().sum();
+    let mut mean = vec![T::default(); n];
+    for (rep, &w) in repetitions.iter().zip(weights) {
+        for (m, &x) in mean.iter_mut().zip(rep.iter()) {
+            *m = *m + x * (w / total_weight);
+        }
+    }
+    let gain2: Vec<f64> = match bin_gains {
+        Some(g) => g.iter().map(|v| v * v).collect(),
+        None => vec![1.0; n],
+    };
+    let (noise_energy, signal_energy) = if repetitions.len() < 2 {
+        (None, None)
+    } else {
+        let spread: f64 = repetitions
+            .iter()
+            .zip(weights)
+            .map(|(rep, &w)| {
+                w * rep.iter().zip(&mean).zip(&gain2).map(|((&x, &m), g)| g * (x - m).power()).sum::<f64>()
+            })
+            .sum();
+        let noise = spread / (repetitions.len() - 1) as f64 / total_weight;
+        let mean_energy: f64 = mean.iter().zip(&gain2).map(|(&m, g)| g * m.power()).sum();
+        (Some(noise), Some((mean_energy - noise).max(0.0)))
+    };
+    let finite = mean.iter().all(|x| x.is_finite())
+        && noise_energy.is_none_or(f64::is_finite)
+        && signal_energy.is_none_or(f64::is_finite);
+    if !finite {
+        return Err(DspError::NonFiniteResult { what: "coherent average" });
+    }
+    Ok(Average { mean, noise_energy, signal_energy })
+}
+
+/// Checks that there is at least one repetition, all finite, non-empty and of one length; returns that length.
+fn check_repetitions<T: Sample>(repetitions: &[&[T]]) -> Result<usize, DspError> {
+    let first = repetitions.first().ok_or(DspError::Empty { input: "repetitions" })?;
+    let n = first.len();
+    if n == 0 {
+        return Err(DspError::Empty { input: "repetition" });
+    }
+    for rep in repetitions {
+        if rep.len() != n {
+            return Err(DspError::LengthMismatch { what: "repetitions", a: n, b: rep.len() });
+        }
+        if let Some(index) = rep.iter().position(|x| !x.is_finite()) {
+            return Err(DspError::NonFinite { input: "repetition", index, value: f64::NAN });
+        }
+    }
+    Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use rand_distr::{Distribution, Normal};
+
+    use super::*;
+
+    #[test]
+    fn mean_of_exact_repetitions_is_the_signal_and_snr_is_unbounded() {
+        let x = [1.0, -2.0, 0.5];
+        let avg = average(&[&x, &x, &x]).unwrap();
+        assert_eq!(avg.mean, x.to_vec());
+        assert_eq!(avg.noise_energy, Some(0.0));
+        assert_eq!(avg.snr_db(), None);
+    }
+
+    #[test]
+    fn one_repetition_gives_the_mean_and_no_snr() {
+        let avg = average(&[&[3.0, 4.0]]).unwrap();
+        assert_eq!(avg.mean, vec![3.0, 4.0]);
+        assert_eq!(avg.noise_energy, None);
+        assert_eq!(avg.snr_db(), None);
+    }
+
+    #[test]
+    fn noise_and_snr_estimates_match_the_truth() {
+        // 8 repetitions of 20 000 samples: the noise estimate has 7 * 20 000 degrees of freedom, a relative standard
+        // deviation of sqrt(2 / 140 000) = 0.4 %; 3 % (0.13 dB) is over 7 sigma.
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let n = 20_000;
+        let signal: Vec<f64> = (0..n).map(|i| (i as f64 * 0.01).sin()).collect();
+        let sigma = 0.3;
+        let noise = Normal::new(0.0, sigma).unwrap();
+        let reps: Vec<Vec<f64>> = (0..8).map(|_| signal.iter().map(|s| s + noise.sample(&mut rng)).collect()).collect();
+        let refs: Vec<&[f64]> = reps.iter().map(Vec::as_slice).collect();
+        let avg = average(&refs).unwrap();
+        let true_noise = sigma * sigma * n as f64 / 8.0;
+        let true_signal: f64 = signal.iter().map(|s| s * s).sum();
+        let noise = avg.noise_energy.unwrap();
+        assert!((noise / true_noise - 1.0).abs() < 0.03, "noise {noise} vs {true_noise}");
+        let true_snr = 10.0 * (true_signal / true_noise).log10();
+        let snr = avg.snr_db().unwrap();
+        assert!((snr - true_snr).abs() < 0.15, "snr {snr} vs {true_snr}");
+        // The mean is closer to the signal than any repetition: its error energy is the noise energy left in it.
+        let err: f64 = avg.mean.iter().zip(&signal).map(|(m, s)| (m - s).powi(2)).sum();
+        assert!((err / true_noise - 1.0).abs() < 0.05, "error {err} vs {true_noise}");
+    }
+
+    #[test]
+    fn weights_follow_inverse_noise_variance() {
+        // Two repetitions, the second with 4x the noise variance: weights 1 and 1/4. The residual-based estimate is
+        // unbiased for the unit-weight variance; averaged over 200 trials of 1000 samples its relative standard
+        // deviation is about sqrt(2 / 200 000) = 0.3 %; 3 % is 10 sigma.
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let n = 1000;
+        let mut ratio_sum = 0.0;
+        let trials = 200;
+        for _ in 0..trials {
+            let a: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0) * 3f64.sqrt()).collect();
+            let b: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0) * 2.0 * 3f64.sqrt()).collect();
+            let avg = weighted_average(&[&a, &b], &[1.0, 0.25]).unwrap();
+            // Noise energy in the mean: n * 1 / W with unit variance for weight 1, W = 1.25.
+            ratio_sum += avg.noise_energy.unwrap() / (n as f64 / 1.25);
+            assert!((avg.mean[0] - (a[0] + 0.25 * b[0]) / 1.25).abs() < 1e-12);
+        }
+        let ratio = ratio_sum / trials as f64;
+        assert!((ratio - 1.0).abs() < 0.03, "mean ratio {ratio}");
+    }
+
+    #[test]
+    fn spectra_count_only_the_band() {
+        // Noise only in bin 1 (outside the band, gain 0): the in-band noise is zero, the SNR unbounded.
+        let a = [Complex64::new(1.0, 0.0), Complex64::new(5.0, 1.0)];
+        let b = [Complex64::new(1.0, 0.0), Complex64::new(-5.0, 2.0)];
+        let avg = average_spectra(&[&a, &b], &[1.0, 1.0], Some(&[1.0, 0.0])).unwrap();
+        assert_eq!(avg.noise_energy, Some(0.0));
+        assert_eq!(avg.signal_energy, Some(1.0));
+        assert_eq!(avg.mean[1], Complex64::new(0.0, 1.5));
+        let all = average_spectra(&[&a, &b], &[1.0, 1.0], None).unwrap();
+        // Spread: each differs from the mean by (+-5, -+0.5): energy 25.25 each, sum 50.5, / (K-1) / W = 25.25.
+        assert!((all.noise_energy.unwrap() - 25.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn pure_noise_has_no_snr() {
+        let a = [1.0, -1.0, 1.0, -1.0];
+        let b = [-1.0, 1.0, -1.0, 1.0];
+        let avg = average(&[&a, &b]).unwrap();
+        assert_eq!(avg.signal_energy, Some(0.0));
+        assert_eq!(avg.snr_db(), None);
+    }
+
+    #[test]
+    fn extremes_of_magnitude() {
+        // Tiny and huge (but not overflowing) samples average exactly; squares that overflow are an error.
+        let tiny = [1e-300, -1e-300];
+        assert_eq!(average(&[&tiny, &tiny]).unwrap().mean, tiny.to_vec());
+        let big = [1e150, -1e150];
+        assert!(average(&[&big, &big]).is_ok());
+        let huge = [1e200, -1e200];
+        let other = [-1e200, 1e200];
+        assert!(matches!(average(&[&huge, &other]), Err(DspError::NonFiniteResult { .. })));
+    }
+
+    #[test]
+    fn refuses_bad_input() {
+        assert!(matches!(average(&[]), Err(DspError::Empty { .. })));
+        assert!(matches!(average(&[&[], &[]]), Err(DspError::Empty { .. })));
+        assert!(matches!(average(&[&[1.0], &[1.0, 2.0]]), Err(DspError::LengthMismatch { .. })));
+        assert!(matches!(average(&[&[1.0], &[f64::NAN]]), Err(DspError::NonFinite { .. })));
+        assert!(matches!(weighted_average(&[&[1.0]], &[0.0]), Err(DspError::InvalidParameter { .. })));
+        assert!(matches!(weighted_average(&[&[1.0]], &[1.0, 1.0]), Err(DspError::LengthMismatch { .. })));
+        let c = [Complex64::new(1.0, 0.0)];
+        assert!(matches!(average_spectra(&[&c], &[1.0], Some(&[1.0, 1.0])), Err(DspError::LengthMismatch { .. })));
+        assert!(matches!(average_spectra(&[&c], &[1.0], Some(&[-1.0])), Err(DspError::InvalidParameter { .. })));
+    }
+}
