@@ -68,7 +68,11 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         let dispersion = simulate::dispersion(&scene, &options, &DISPERSION_FREQS_HZ)?;
         let grid = if args.full { None } else { Some((13, 7)) };
         let points = simulate::select_points(&scene, grid)?;
-        eprintln!("[{name}] ground-truth Green's functions: {} points x {} actuators", points.len(), scene.actuators.len());
+        eprintln!(
+            "[{name}] ground-truth Green's functions: {} points x {} actuators",
+            points.len(),
+            scene.actuators.len()
+        );
         let request = GreensRequest {
             points,
             actuators: (0..scene.actuators.len()).collect(),
@@ -137,7 +141,8 @@ fn measurement_chain(scene: &Scene, options: &ModelOptions, args: &DemoArgs) -> 
         let mut linear_coil = coil.clone();
         linear_coil.nonlinearity = 0.0;
         let single = repeat(&excitation, 1, fs_hz);
-        let single_drive: Vec<f64> = calibration.filter.apply(&single)?[..single.len()].iter().map(|v| v * scale).collect();
+        let single_drive: Vec<f64> =
+            calibration.filter.apply(&single)?[..single.len()].iter().map(|v| v * scale).collect();
         let ideal_velocity = conv::convolve(&linear_coil.drive_to_force(&single_drive)?, g)?;
         let ideal = metaplate_dsp::deconv::deconvolve_with_reference(&ideal_velocity[..single.len()], &single, &cfg)?;
         let ir: Vec<f64> = result.ir.iter().map(|v| v / scale).collect();
@@ -174,14 +179,16 @@ fn calibrate(coil: &VoiceCoil) -> anyhow::Result<Calibration> {
     let fs_hz = coil.sample_rate_hz;
     let sweep = SweepSpec { f1_hz: 50.0, amplitude: 0.5, ..SweepSpec::default() }.generate()?;
     let band = BandLimit::new(50.0, 625.0, 20.0, 100.0)?;
-    let cfg = DeconvConfig { sample_rate_hz: fs_hz, ir_len: 4096, band: Some(band), regularisation: 1e-4, pre_samples: 0 };
+    let cfg =
+        DeconvConfig { sample_rate_hz: fs_hz, ir_len: 4096, band: Some(band), regularisation: 1e-4, pre_samples: 0 };
     let with_tail = |x: Vec<f64>| {
         let mut x = x;
         x.resize(x.len() + cfg.ir_len, 0.0);
         x
     };
     let response = deconvolve(&coil.drive_to_force(&with_tail(sweep.clone()))?, &sweep, &cfg)?;
-    let filter = kirkeby::design(&response, &KirkebyConfig { sample_rate_hz: fs_hz, ..KirkebyConfig::calibration_default() })?;
+    let filter =
+        kirkeby::design(&response, &KirkebyConfig { sample_rate_hz: fs_hz, ..KirkebyConfig::calibration_default() })?;
     let compensated = filter.apply(&sweep)?;
     let verify_cfg = DeconvConfig { ir_len: 16_384, ..cfg };
     let verified = deconvolve(&coil.drive_to_force(&with_tail(compensated))?, &sweep, &verify_cfg)?;
@@ -212,7 +219,12 @@ fn repeat(x: &[f64], repetitions: usize, fs_hz: f64) -> Vec<f64> {
 
 /// What the DAQ records of a signal played on the audio interface's clock: latency and clock drift (band-limited
 /// resampling), and for the velocity channel the LDV's noise and the DAQ's 16-bit quantisation over its range.
-fn record(played: &[f64], scene: &Scene, rng: &mut rand_chacha::ChaCha8Rng, is_velocity: bool) -> anyhow::Result<Vec<f64>> {
+fn record(
+    played: &[f64],
+    scene: &Scene,
+    rng: &mut rand_chacha::ChaCha8Rng,
+    is_velocity: bool,
+) -> anyhow::Result<Vec<f64>> {
     // Recorder sample n sees the player at position (n - latency) * ratio.
     let ratio = (1.0 + AUDIO_PPM * 1e-6) / (1.0 + DAQ_PPM * 1e-6);
     let out_len = played.len() + LATENCY_SAMPLES.ceil() as usize + 64;
@@ -260,17 +272,34 @@ fn print_table(summary: &Value) {
             .map(|p| p["wavelength_m"].as_f64().unwrap_or(f64::NAN))
             .unwrap_or(f64::NAN)
     };
-    let ratios: Vec<f64> = DISPERSION_FREQS_HZ.iter().map(|&f| disp("homogeneous", f) / disp("metamaterial", f)).collect();
+    let ratios: Vec<f64> =
+        DISPERSION_FREQS_HZ.iter().map(|&f| disp("homogeneous", f) / disp("metamaterial", f)).collect();
     let (rmin, rmax) = ratios.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), &r| (a.min(r), b.max(r)));
     println!("\n{:<52} {:>16} {:>16}", "quantity", "paper", "metaplate");
-    println!("{:<52} {:>16} {:>13.1} cm", "wavelength, metamaterial, 75 Hz", "11.3 cm", disp("metamaterial", 75.0) * 100.0);
-    println!("{:<52} {:>16} {:>13.1} cm", "wavelength, metamaterial, 600 Hz", "2.5 cm", disp("metamaterial", 600.0) * 100.0);
-    println!("{:<52} {:>16} {:>7.1} to {:.1}", "homogeneous / metamaterial wavelength (k-space)", "2.1 to 4.8", rmin, rmax);
+    println!(
+        "{:<52} {:>16} {:>13.1} cm",
+        "wavelength, metamaterial, 75 Hz",
+        "11.3 cm",
+        disp("metamaterial", 75.0) * 100.0
+    );
+    println!(
+        "{:<52} {:>16} {:>13.1} cm",
+        "wavelength, metamaterial, 600 Hz",
+        "2.5 cm",
+        disp("metamaterial", 600.0) * 100.0
+    );
+    println!(
+        "{:<52} {:>16} {:>7.1} to {:.1}",
+        "homogeneous / metamaterial wavelength (k-space)", "2.1 to 4.8", rmin, rmax
+    );
     let rows = summary["measurement_chain"]["per_actuator"].as_array().cloned().unwrap_or_default();
     let worst = |key: &str| rows.iter().filter_map(|r| r[key].as_f64()).fold(f64::NEG_INFINITY, f64::max);
     let best = |key: &str| rows.iter().filter_map(|r| r[key].as_f64()).fold(f64::INFINITY, f64::min);
     println!("\nmeasurement chain, centre point, 8 actuators (paper protocol, 50 ppm drift, LDV noise, 16-bit DAQ):");
-    println!("  Green's function error against the noise-free linear chain: {:.1} dB (worst actuator)", worst("error_db"));
+    println!(
+        "  Green's function error against the noise-free linear chain: {:.1} dB (worst actuator)",
+        worst("error_db")
+    );
     println!("  SNR estimate from the repetitions: {:.1} to {:.1} dB", best("snr_db"), worst("snr_db"));
     println!(
         "  drift estimated {:.2} to {:.2} ppm (true {:.2})",

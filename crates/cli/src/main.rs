@@ -4,9 +4,10 @@
 
 use clap::{Parser, Subcommand};
 
-mod scene;
+mod deconvolve;
 mod demo;
 mod progress;
+mod scene;
 mod simulate;
 mod sweep;
 mod wav;
@@ -27,6 +28,8 @@ enum Command {
     /// The main job: run the suite end to end on the built-in simulated plates and print the paper-against-suite
     /// table.
     Demo(demo::DemoArgs),
+    /// Deconvolve a recorded WAV by its excitation (or by a loopback channel) into impulse responses.
+    Deconvolve(deconvolve::DeconvolveArgs),
     /// Write an excitation sweep (the paper's by default) as a 32-bit float WAV file.
     Sweep(sweep::SweepArgs),
     /// List the built-in scenes, or show one (or a scene file) fully resolved.
@@ -42,6 +45,7 @@ fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Demo(args) => demo::run(&args),
+        Command::Deconvolve(args) => deconvolve::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Simulate { command } => simulate::run(&command),

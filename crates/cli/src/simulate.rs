@@ -123,7 +123,8 @@ pub fn run(command: &SimulateCommand) -> anyhow::Result<()> {
                 duration_s: args.duration_s,
                 sample_rate_hz: scene.daq.sample_rate_hz,
             };
-            let summary = write_ground_truth(&scene, &options, &request, &args.out, args.force, args.cache_dir.as_deref())?;
+            let summary =
+                write_ground_truth(&scene, &options, &request, &args.out, args.force, args.cache_dir.as_deref())?;
             println!("{}", serde_json::to_string_pretty(&summary)?);
             Ok(())
         }
@@ -131,7 +132,12 @@ pub fn run(command: &SimulateCommand) -> anyhow::Result<()> {
 }
 
 fn frequencies(from_hz: f64, to_hz: f64, step_hz: f64) -> anyhow::Result<Vec<f64>> {
-    if !(from_hz.is_finite() && to_hz.is_finite() && step_hz.is_finite() && from_hz > 0.0 && to_hz >= from_hz && step_hz > 0.0)
+    if !(from_hz.is_finite()
+        && to_hz.is_finite()
+        && step_hz.is_finite()
+        && from_hz > 0.0
+        && to_hz >= from_hz
+        && step_hz > 0.0)
     {
         bail!("need 0 < --from-hz <= --to-hz and --step-hz > 0, got {from_hz}, {to_hz}, {step_hz}");
     }
@@ -194,7 +200,10 @@ pub fn dispersion(scene: &Scene, options: &ModelOptions, freqs: &[f64]) -> anyho
 }
 
 fn print_dispersion(report: &Value) {
-    println!("{:>8}  {:>11}  {:>11}  {:>10}  {:>9}  k-space flagged", "f (Hz)", "k-space (cm)", "local (cm)", "A0 (cm)", "A0/k-space");
+    println!(
+        "{:>8}  {:>11}  {:>11}  {:>10}  {:>9}  k-space flagged",
+        "f (Hz)", "k-space (cm)", "local (cm)", "A0 (cm)", "A0/k-space"
+    );
     for p in report["points"].as_array().into_iter().flatten() {
         let cm = |k: &str| p[k].as_f64().unwrap_or(f64::NAN) * 100.0;
         println!(
@@ -220,11 +229,8 @@ pub fn write_ground_truth(
     cache_dir: Option<&Path>,
 ) -> anyhow::Result<Value> {
     let started = std::time::Instant::now();
-    let spinner = progress::spinner(format!(
-        "computing {} points x {} actuators",
-        request.points.len(),
-        request.actuators.len()
-    ));
+    let spinner =
+        progress::spinner(format!("computing {} points x {} actuators", request.points.len(), request.actuators.len()));
     let greens = metaplate_plate::greens_functions(scene, options, request, cache_dir)?;
     spinner.finish_and_clear();
     let compute_s = started.elapsed().as_secs_f64();
@@ -244,7 +250,7 @@ pub fn write_ground_truth(
         SceneId { name: scene.name.clone(), hash: format!("{:016x}", scene.content_hash()) },
         env!("CARGO_PKG_VERSION"),
         scene.seed,
-        scene.grid.clone(),
+        scene.grid,
     );
     let if_exists = if force { IfExists::Replace } else { IfExists::Refuse };
     let mut writer = DatasetWriter::create(out, meta, if_exists)

@@ -45,9 +45,7 @@ pub fn read(path: &Path) -> anyhow::Result<(f64, Vec<Vec<f64>>)> {
         bail!("{} has no channels", path.display());
     }
     let interleaved: Vec<f64> = match spec.sample_format {
-        hound::SampleFormat::Float => {
-            reader.samples::<f32>().map(|s| s.map(f64::from)).collect::<Result<_, _>>()?
-        }
+        hound::SampleFormat::Float => reader.samples::<f32>().map(|s| s.map(f64::from)).collect::<Result<_, _>>()?,
         hound::SampleFormat::Int => {
             let full_scale = f64::from(1u32 << (spec.bits_per_sample.clamp(1, 32) - 1));
             reader.samples::<i32>().map(|s| s.map(|v| f64::from(v) / full_scale)).collect::<Result<_, _>>()?

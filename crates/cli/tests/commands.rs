@@ -1,0 +1,135 @@
+//! The `metaplate` binary end to end: each command as a user runs it, its output checked.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn metaplate(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("metaplate-cli-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn scene_list_and_show() {
+    let out = metaplate(&["scene", "list"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("metamaterial") && text.contains("homogeneous"), "{text}");
+    let out = metaplate(&["scene", "show", "homogeneous"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8(out.stdout).unwrap().contains("thickness_m"));
+}
+
+#[test]
+fn a_bad_scene_file_is_a_clear_error_not_a_panic() {
+    let dir = scratch("bad-scene");
+    let path = dir.join("bad.toml");
+    let good = String::from_utf8(metaplate(&["scene", "show", "metamaterial"]).stdout).unwrap();
+    std::fs::write(&path, good.replacen("thickness_m", "thickness_mm", 1)).unwrap();
+    let out = metaplate(&["scene", "show", path.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("thickness_mm") && err.contains("thickness_m"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn sweep_then_deconvolve_recovers_a_unit_impulse() {
+    let dir = scratch("sweep");
+    let sweep = dir.join("sweep.wav");
+    let ir = dir.join("ir.wav");
+    assert!(metaplate(&["sweep", "--out", sweep.to_str().unwrap(), "--duration-s", "1"]).status.success());
+    let out = metaplate(&[
+        "deconvolve",
+        "--recording",
+        sweep.to_str().unwrap(),
+        "--excitation",
+        sweep.to_str().unwrap(),
+        "--out",
+        ir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut reader = hound::WavReader::open(&ir).unwrap();
+    let samples: Vec<f32> = reader.samples::<f32>().map(Result::unwrap).collect();
+    assert_eq!(samples.len(), 12_000);
+    // The system is the identity: a band-limited unit impulse at time 0. Its peak is the band's width over the
+    // Nyquist band, (625 - 62 + skirts) / 12000, about 0.05; it sits at sample 0 and dominates everything else.
+    let peak = samples.iter().enumerate().fold((0, 0.0f32), |m, (i, &v)| if v.abs() > m.1 { (i, v.abs()) } else { m });
+    assert_eq!(peak.0, 0);
+    assert!((0.04..0.06).contains(&peak.1), "peak {}", peak.1);
+}
+
+#[test]
+fn deconvolve_without_excitation_or_reference_is_refused() {
+    let dir = scratch("no-ref");
+    let sweep = dir.join("sweep.wav");
+    assert!(metaplate(&["sweep", "--out", sweep.to_str().unwrap(), "--duration-s", "0.5"]).status.success());
+    let out = metaplate(&["deconvolve", "--recording", sweep.to_str().unwrap(), "--out", "x.wav"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8(out.stderr).unwrap().contains("--excitation"));
+}
+
+#[test]
+fn simulate_greens_writes_a_dataset_the_store_reads() {
+    let dir = scratch("greens").join("gt");
+    // A coarse lattice and a short, high band keep this test to seconds; the physics is tested in the plate crate.
+    let out = metaplate(&[
+        "simulate",
+        "greens",
+        "--scene",
+        "homogeneous",
+        "--grid",
+        "3x2",
+        "--refinement",
+        "1",
+        "--duration-s",
+        "0.1",
+        "--band-lo-hz",
+        "300",
+        "--band-hi-hz",
+        "700",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let dataset = metaplate_store::Dataset::open(&dir).unwrap();
+    assert_eq!(dataset.actuators().len(), 8);
+    assert_eq!(dataset.points().len(), 6);
+    assert_eq!(dataset.ir_len(), 2400);
+    assert!(dataset.irs().iter().any(|v| *v != 0.0));
+    // A second run refuses to overwrite the dataset without --force.
+    let again =
+        metaplate(&["simulate", "greens", "--scene", "homogeneous", "--grid", "3x2", "--out", dir.to_str().unwrap()]);
+    assert!(!again.status.success());
+    assert!(String::from_utf8(again.stderr).unwrap().contains("--force"));
+}
+
+#[test]
+fn simulate_dispersion_prints_the_documented_json() {
+    let out = metaplate(&[
+        "simulate",
+        "dispersion",
+        "--scene",
+        "metamaterial",
+        "--refinement",
+        "1",
+        "--from-hz",
+        "300",
+        "--to-hz",
+        "300",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let p = &v["points"][0];
+    assert_eq!(p["freq_hz"], 300.0);
+    let (lambda, a0) = (p["wavelength_m"].as_f64().unwrap(), p["a0_wavelength_m"].as_f64().unwrap());
+    // The metamaterial's waves at 300 Hz are 5.3 cm (plate tests); on the coarse lattice a few % shorter. A0: 12.7 cm.
+    assert!((0.045..0.06).contains(&lambda), "{lambda}");
+    assert!((a0 - 0.1268).abs() < 0.001, "{a0}");
+}
