@@ -4,5 +4,6 @@
 //! capability traits (`Vibrometer`, `Daq`, `AudioOut`, `Clock`) as the driver layers arrive. It depends on nothing
 //! else in the workspace, and everything else may depend on it.
 
+pub mod clock;
 pub mod grid;
 pub mod scene;
