@@ -5,5 +5,7 @@
 //! else in the workspace, and everything else may depend on it.
 
 pub mod clock;
+pub mod daq;
 pub mod grid;
 pub mod scene;
+pub mod vibrometer;

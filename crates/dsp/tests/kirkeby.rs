@@ -6,6 +6,7 @@ use std::f64::consts::PI;
 
 use metaplate_dsp::DspError;
 use metaplate_dsp::band::BandLimit;
+use metaplate_dsp::deconv::DeconvConfig;
 use metaplate_dsp::fft;
 use metaplate_dsp::kirkeby::{KirkebyConfig, KirkebyFilter, TargetPhase, design, design_spectrum};
 use num_complex::Complex64;
@@ -304,6 +305,71 @@ fn fir_len_extremes() {
 }
 
 #[test]
+fn response_delay_is_removed_before_the_design() {
+    let c = model_actuator();
+    let cfg = KirkebyConfig::calibration_default();
+    let causal = design(&c, &cfg).unwrap();
+    let peak = causal.taps.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
+    // The same response behind 1000 zeros, declared as its time 0: the same design FFT (32768 points), whose
+    // circular rotation puts the zeros at negative time, so the same filter to rounding (1e-12 of the peak tap).
+    for delay in [1000, 4095] {
+        let mut delayed = vec![0.0; delay];
+        delayed.extend_from_slice(&c[..c.len().min(8192 - delay)]);
+        let filter = design(&delayed, &KirkebyConfig { response_delay_samples: delay, ..cfg }).unwrap();
+        let err = filter.taps.iter().zip(&causal.taps).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(err < 1e-12 * peak, "delay {delay}: taps differ by {err:e} of {peak:e}");
+    }
+    // The delay must lie inside the response (its last sample is the largest valid one).
+    assert!(design(&c, &KirkebyConfig { response_delay_samples: c.len() - 1, ..cfg }).is_ok());
+    let bad = KirkebyConfig { response_delay_samples: c.len(), ..cfg };
+    assert!(matches!(design(&c, &bad), Err(DspError::InvalidParameter { name: "response_delay_samples", .. })));
+}
+
+#[test]
+fn calibration_recipe_takes_the_measurement_s_rate_and_pre_samples() {
+    let deconv = DeconvConfig { sample_rate_hz: 48_000.0, ..DeconvConfig::calibration() };
+    let cfg = KirkebyConfig::calibration(&deconv);
+    assert_eq!((cfg.sample_rate_hz, cfg.response_delay_samples), (48_000.0, 2048));
+    // Everything else is the calibration default, modelling delay included (the pre-samples are not added to it).
+    let default = KirkebyConfig::calibration_default();
+    assert_eq!(KirkebyConfig { sample_rate_hz: default.sample_rate_hz, response_delay_samples: 0, ..cfg }, default);
+}
+
+/// `c` through a zero-phase band limit (on a long grid, so nothing wraps), as a deconvolution returns it: `len`
+/// samples from time `-pre` (the pre-ringing before time 0 first).
+fn band_limited_window(c: &[f64], band: BandLimit, pre: usize, len: usize) -> Vec<f64> {
+    let n = 1 << 17;
+    let spectrum: Vec<Complex64> =
+        fft::forward(c, n).unwrap().iter().zip(band.bin_gains(n, FS_HZ)).map(|(v, g)| v * g).collect();
+    let mut y = fft::inverse(&spectrum, n).unwrap();
+    y.rotate_right(pre);
+    y.truncate(len);
+    y
+}
+
+#[test]
+fn a_two_sided_band_limited_response_is_flattened() {
+    // The calibration measurement's band (DeconvConfig::calibration): the band limit rings before time 0.
+    let band = BandLimit::new(50.0, 625.0, 20.0, 100.0).unwrap();
+    let c = model_actuator();
+    let pre = 2048;
+    let measured = band_limited_window(&c, band, pre, 8192);
+    let cfg = KirkebyConfig { response_delay_samples: pre, ..KirkebyConfig::calibration_default() };
+    let y = design(&measured, &cfg).unwrap().apply(&c).unwrap();
+    // The physical response through the filter, over the scan's band: the default design's budget (measured
+    // -0.05 .. +0.04 dB).
+    let (lo, hi) = band_extremes_db(&y, 62.0, 625.0);
+    assert!(lo > -0.5 && hi < 0.5, "two-sided: in-band {lo} .. {hi} dB");
+    // The causal cut of the same response loses the pre-ringing, which the design then inverts too: measured
+    // -0.06 .. +0.75 dB, outside the budget (this actuator's onset is smoother than a voice coil's, whose causal
+    // cut costs more, see tests/calibration.rs).
+    let causal = band_limited_window(&c, band, 0, 8192);
+    let y = design(&causal, &KirkebyConfig::calibration_default()).unwrap().apply(&c).unwrap();
+    let (lo, hi) = band_extremes_db(&y, 62.0, 625.0);
+    assert!(lo < -0.5 || hi > 0.5, "causal cut: in-band {lo} .. {hi} dB, within the budget after all");
+}
+
+#[test]
 fn beta_is_relative_so_the_design_is_scale_free() {
     let c = model_actuator();
     let cfg = KirkebyConfig::calibration_default();
@@ -343,6 +409,7 @@ fn refuses_bad_configurations() {
         (KirkebyConfig { beta: f64::INFINITY, ..base }, "beta"),
         (KirkebyConfig { sample_rate_hz: 0.0, ..base }, "sample_rate_hz"),
     ];
+    bad.push((KirkebyConfig { response_delay_samples: c.len(), ..base }, "response_delay_samples"));
     let mut cfg = base;
     cfg.profile.in_band = -1.0;
     bad.push((cfg, "profile.in_band"));

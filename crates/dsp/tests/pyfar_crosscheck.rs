@@ -215,6 +215,7 @@ impl DeconvFixture {
             ir_len: self.ir_len,
             band,
             regularisation: self.regularisation,
+            pre_samples: 0,
         }
     }
 
@@ -395,6 +396,7 @@ impl InversionFixture {
             sample_rate_hz: self.sample_rate_hz,
             fir_len: self.n_fft,
             modelling_delay_samples,
+            response_delay_samples: 0,
             beta: self.beta,
             profile: RegularisationProfile { band: self.band.limit(), in_band, out_of_band },
             // A pure-delay target: pyfar has no minimum-phase target, and the brief compares before any phase step.

@@ -1,0 +1,137 @@
+//! The real bulk transport: a USB device found by vendor id, product id and serial number, through nusb (blocking
+//! calls, no async runtime). Never exercised in CI; the opt-in real-device test uses it.
+
+use std::time::Duration;
+
+use metaplate_daq_protocol::MAX_FRAME_LEN;
+use nusb::transfer::{Buffer, Bulk, Completion, In, Out, TransferError};
+use nusb::{Endpoint, Interface, MaybeFuture};
+
+use crate::transport::{BulkTransport, TransportError};
+
+/// Which device, interface and endpoints to use.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UsbSelector {
+    /// USB vendor id.
+    pub vendor_id: u16,
+    /// USB product id.
+    pub product_id: u16,
+    /// Serial number string descriptor; `None` takes the first device with these ids (only for a lab with one).
+    pub serial: Option<String>,
+    /// Interface number that carries the bulk endpoints.
+    pub interface: u8,
+    /// Bulk OUT endpoint address (commands), e.g. `0x01`.
+    pub endpoint_out: u8,
+    /// Bulk IN endpoint address (replies and samples), e.g. `0x81`.
+    pub endpoint_in: u8,
+}
+
+/// An open USB device: its claimed interface and its two bulk endpoints.
+pub struct UsbTransport {
+    selector: UsbSelector,
+    ep_out: Endpoint<Bulk, Out>,
+    ep_in: Endpoint<Bulk, In>,
+    /// Kept so the interface stays claimed while the endpoints are in use.
+    _interface: Interface,
+}
+
+impl std::fmt::Debug for UsbTransport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("UsbTransport").field("selector", &self.selector).finish_non_exhaustive()
+    }
+}
+
+fn other(context: &str, e: impl std::fmt::Display) -> TransportError {
+    TransportError::Other(format!("{context}: {e}"))
+}
+
+fn nusb_error(context: &str, e: nusb::Error) -> TransportError {
+    match e.kind() {
+        nusb::ErrorKind::Disconnected => TransportError::Disconnected(format!("{context}: {e}")),
+        _ => other(context, e),
+    }
+}
+
+impl UsbTransport {
+    /// Finds the device, opens it and claims the interface and endpoints.
+    ///
+    /// # Errors
+    /// [`TransportError::Disconnected`] if no device matches; [`TransportError::Other`] if it cannot be opened or
+    /// claimed (permissions, a kernel driver holding it, no such endpoint).
+    pub fn open(selector: UsbSelector) -> Result<Self, TransportError> {
+        let found = nusb::list_devices()
+            .wait()
+            .map_err(|e| nusb_error("listing USB devices", e))?
+            .find(|d| {
+                d.vendor_id() == selector.vendor_id
+                    && d.product_id() == selector.product_id
+                    && selector.serial.as_deref().is_none_or(|s| d.serial_number() == Some(s))
+            })
+            .ok_or_else(|| {
+                TransportError::Disconnected(format!(
+                    "no USB device {:04x}:{:04x} with serial {:?}",
+                    selector.vendor_id, selector.product_id, selector.serial
+                ))
+            })?;
+        let device = found.open().wait().map_err(|e| nusb_error("opening the device", e))?;
+        let interface =
+            device.claim_interface(selector.interface).wait().map_err(|e| nusb_error("claiming the interface", e))?;
+        let ep_out = interface
+            .endpoint::<Bulk, Out>(selector.endpoint_out)
+            .map_err(|e| nusb_error("opening the bulk OUT endpoint", e))?;
+        let ep_in = interface
+            .endpoint::<Bulk, In>(selector.endpoint_in)
+            .map_err(|e| nusb_error("opening the bulk IN endpoint", e))?;
+        Ok(Self { selector, ep_out, ep_in, _interface: interface })
+    }
+}
+
+/// Maps a completed transfer's status; a stall is cleared here so the caller may retry.
+fn status<Dir: nusb::transfer::EndpointDirection>(
+    completion: &Completion,
+    endpoint: &mut Endpoint<Bulk, Dir>,
+) -> Result<(), TransportError> {
+    match completion.status {
+        Ok(()) => Ok(()),
+        Err(TransferError::Cancelled) => Err(TransportError::Timeout),
+        Err(TransferError::Stall) => {
+            endpoint.clear_halt().wait().map_err(|e| nusb_error("clearing a stall", e))?;
+            Err(TransportError::Stall)
+        }
+        Err(TransferError::Disconnected) => Err(TransportError::Disconnected("during a transfer".into())),
+        Err(e) => Err(other("transfer", e)),
+    }
+}
+
+impl BulkTransport for UsbTransport {
+    fn write(&mut self, bytes: &[u8], timeout: Duration) -> Result<(), TransportError> {
+        // `transfer_blocking` asserts that nothing is pending; this transport never leaves a transfer pending.
+        if self.ep_out.pending() != 0 {
+            return Err(TransportError::Other("a previous OUT transfer is still pending".into()));
+        }
+        let completion = self.ep_out.transfer_blocking(Buffer::from(bytes.to_vec()), timeout);
+        status(&completion, &mut self.ep_out)
+    }
+
+    fn read(&mut self, timeout: Duration) -> Result<Vec<u8>, TransportError> {
+        if self.ep_in.pending() != 0 {
+            return Err(TransportError::Other("a previous IN transfer is still pending".into()));
+        }
+        // IN requests must be a whole number of max-size packets; one maximum frame fits.
+        let packet = self.ep_in.max_packet_size().max(1);
+        let len = MAX_FRAME_LEN.div_ceil(packet) * packet;
+        let completion = self.ep_in.transfer_blocking(self.ep_in.allocate(len), timeout);
+        let received = completion.buffer.get(..completion.actual_len).map(<[u8]>::to_vec).unwrap_or_default();
+        match status(&completion, &mut self.ep_in) {
+            // A transfer cancelled at the timeout may still have carried bytes: keep them.
+            Err(TransportError::Timeout) if !received.is_empty() => Ok(received),
+            Err(e) => Err(e),
+            Ok(()) => Ok(received),
+        }
+    }
+
+    fn reopen(&mut self) -> Result<(), TransportError> {
+        *self = Self::open(self.selector.clone())?;
+        Ok(())
+    }
+}

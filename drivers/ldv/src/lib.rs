@@ -1,0 +1,20 @@
+//! Driver for the scanning laser Doppler vibrometer's controller on a serial line.
+//!
+//! [`LdvDriver`] implements [`metaplate_core::vibrometer::Vibrometer`] over any [`SerialLine`]: the real port
+//! ([`SerialPortLine`], `serialport` built without libudev) or a mock (`metaplate-mock-ldv`, in process or on a
+//! pseudo-terminal). The wire protocol, its timeouts and its `SYNC` resynchronisation are specified in
+//! `metaplate-ldv-protocol`; this crate adds the I/O, the bounded retries and the reconnect.
+//!
+//! Error policy: a missing, garbled or stale reply is retried after a resynchronisation; after
+//! [`RetryPolicy::attempts`] it is a `Timeout`. A vanished line is `Disconnected` at once; `reconnect` reopens it
+//! (by path or USB serial number) and re-applies the last settings.
+
+mod driver;
+mod line;
+mod policy;
+mod serial;
+
+pub use driver::{AppliedSettings, LdvDriver};
+pub use line::{LineError, SerialLine};
+pub use policy::RetryPolicy;
+pub use serial::{BAUD_RATE, PortSelector, SerialPortLine};

@@ -1,0 +1,101 @@
+//! Fault injection: a schedule of faults keyed by IN-transfer number, written by hand or drawn from a seed.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A fault the mock transport injects when the host attempts a given IN transfer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fault {
+    /// The IN endpoint stalls: this read and the `reads - 1` after it time out. The device's frames are held,
+    /// not lost, and arrive once the stall ends.
+    Stall {
+        /// Reads that time out (at least 1 to have an effect).
+        reads: u32,
+    },
+    /// The device drops off the bus (it power-cycles: configuration and acquisition are lost). Every transfer
+    /// fails with `Disconnected` until the host reopens it.
+    Disconnect,
+    /// The device's buffer overflows: `packets` packets' worth of samples are dropped at the source, the next
+    /// packet carries the overrun flag and a sample index that skips them. Nothing happens while idle.
+    Overrun {
+        /// Packets' worth of samples lost.
+        packets: u32,
+    },
+    /// An overflow the device cannot recover from: it reports a buffer-overrun `Error` and `Stopped`.
+    FatalOverrun,
+}
+
+/// Probabilities per IN transfer for [`FaultSchedule::seeded`].
+///
+/// Valid range: each in `0..=1` (values outside are clamped, NaN counts as 0); their sum at most 1 (beyond,
+/// the later kinds are drawn less often than asked).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FaultRates {
+    /// Probability that a read starts a stall of 1 to `max_stall_reads` reads.
+    pub stall: f64,
+    /// The longest stall drawn, reads (at least 1).
+    pub max_stall_reads: u32,
+    /// Probability of a disconnect.
+    pub disconnect: f64,
+    /// Probability of a recoverable overrun of 1 to 4 packets.
+    pub overrun: f64,
+}
+
+/// Faults by IN-transfer number (0 for the host's first read attempt), in order.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct FaultSchedule {
+    events: Vec<(u64, Fault)>,
+}
+
+fn probability(p: f64) -> f64 {
+    if p.is_nan() { 0.0 } else { p.clamp(0.0, 1.0) }
+}
+
+impl FaultSchedule {
+    /// No faults.
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// Adds `fault` at IN transfer `read_index` (several faults at one index apply in the order added).
+    pub fn at(mut self, read_index: u64, fault: Fault) -> Self {
+        let pos = self.events.partition_point(|&(i, _)| i <= read_index);
+        self.events.insert(pos, (read_index, fault));
+        self
+    }
+
+    /// Draws faults for IN transfers `0..horizon_reads` from `rates`, deterministically from `seed` (the same
+    /// seed and rates always give the same schedule).
+    pub fn seeded(seed: u64, rates: FaultRates, horizon_reads: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let stall = probability(rates.stall);
+        let disconnect = probability(rates.disconnect);
+        let overrun = probability(rates.overrun);
+        let mut events = Vec::new();
+        for read_index in 0..horizon_reads {
+            let u: f64 = rng.random();
+            let fault = if u < stall {
+                Fault::Stall { reads: rng.random_range(1..=rates.max_stall_reads.max(1)) }
+            } else if u < stall + disconnect {
+                Fault::Disconnect
+            } else if u < stall + disconnect + overrun {
+                Fault::Overrun { packets: rng.random_range(1..=4) }
+            } else {
+                continue;
+            };
+            events.push((read_index, fault));
+        }
+        Self { events }
+    }
+
+    /// The scheduled faults, by IN-transfer number, in order.
+    pub fn events(&self) -> &[(u64, Fault)] {
+        &self.events
+    }
+
+    /// The faults due at `read_index`.
+    pub(crate) fn due(&self, read_index: u64) -> impl Iterator<Item = Fault> + '_ {
+        let start = self.events.partition_point(|&(i, _)| i < read_index);
+        self.events[start..].iter().take_while(move |&&(i, _)| i == read_index).map(|&(_, f)| f)
+    }
+}

@@ -1,0 +1,183 @@
+//! The controller on its serial link: bytes in, faults applied, bytes out. Shared by the in-process line and the
+//! pseudo-terminal server.
+
+use std::sync::Arc;
+
+use metaplate_core::clock::VirtualClock;
+use metaplate_ldv_protocol::{Command, CommandDecoder, LaserState, Reply, encode_reply};
+
+use crate::controller::MockController;
+use crate::faults::{Fault, FaultSchedule};
+
+/// The mock controller with its link: decodes host bytes, answers each line (with the scheduled faults), queues
+/// the reply bytes, and records what the host sent.
+#[derive(Debug)]
+pub struct MockDevice {
+    controller: MockController,
+    decoder: CommandDecoder,
+    faults: FaultSchedule,
+    lines_received: u64,
+    output: Vec<u8>,
+    held_back: Option<Vec<u8>>,
+    link_up: bool,
+    host_log: Vec<u8>,
+    clock: Option<Arc<VirtualClock>>,
+}
+
+impl MockDevice {
+    /// `controller` on a working link with `faults`.
+    pub fn new(controller: MockController, faults: FaultSchedule) -> Self {
+        Self {
+            controller,
+            decoder: CommandDecoder::new(),
+            faults,
+            lines_received: 0,
+            output: Vec::new(),
+            held_back: None,
+            link_up: true,
+            host_log: Vec::new(),
+            clock: None,
+        }
+    }
+
+    /// Advances `clock` by each command's specified response time (section 6 of the protocol), so that a session
+    /// takes its real duration in simulated time and none in wall time.
+    pub fn with_clock(mut self, clock: Arc<VirtualClock>) -> Self {
+        self.clock = Some(clock);
+        self
+    }
+
+    /// The controller, to inspect its state.
+    pub fn controller(&self) -> &MockController {
+        &self.controller
+    }
+
+    /// The controller, to change its state (calibration, latched fault).
+    pub fn controller_mut(&mut self) -> &mut MockController {
+        &mut self.controller
+    }
+
+    /// Every byte the host has written, in order (bytes written while the link was down are not received).
+    pub fn host_log(&self) -> &[u8] {
+        &self.host_log
+    }
+
+    /// Non-blank lines received so far (the index the next line's fault is looked up by).
+    pub fn lines_received(&self) -> u64 {
+        self.lines_received
+    }
+
+    /// Whether the link is up.
+    pub fn is_connected(&self) -> bool {
+        self.link_up
+    }
+
+    /// Brings the link back up (the host reopened the port); bytes in flight are lost.
+    pub fn reconnect(&mut self) {
+        if !self.link_up {
+            self.link_up = true;
+            self.decoder.clear();
+            self.output.clear();
+            self.held_back = None;
+        }
+    }
+
+    /// Receives host bytes and answers every complete line. Ignored while the link is down.
+    pub fn receive(&mut self, bytes: &[u8]) {
+        if !self.is_connected() {
+            return;
+        }
+        self.host_log.extend_from_slice(bytes);
+        self.decoder.push(bytes);
+        while let Some(line) = self.decoder.poll() {
+            self.answer(line);
+            if !self.is_connected() {
+                break;
+            }
+        }
+    }
+
+    /// Takes the bytes queued for the host (empty when there are none or the link is down).
+    pub fn take_output(&mut self) -> Vec<u8> {
+        std::mem::take(&mut self.output)
+    }
+
+    /// Puts bytes back at the front of the output queue (a reader that took more than it could use).
+    pub fn unread(&mut self, mut bytes: Vec<u8>) {
+        bytes.extend_from_slice(&self.output);
+        self.output = bytes;
+    }
+
+    fn answer(&mut self, line: Result<Command, metaplate_ldv_protocol::LdvProtocolError>) {
+        let index = self.lines_received;
+        self.lines_received += 1;
+        if let (Some(clock), Ok(command)) = (&self.clock, &line) {
+            clock.advance(response_time_s(command));
+        }
+        let fault = self.faults.fault_at(index);
+        let reply = match fault {
+            Some(Fault::Busy) => encode_reply(&busy()),
+            Some(Fault::Disconnect { power_cycle }) => {
+                if power_cycle {
+                    self.controller.power_cycle();
+                }
+                self.link_up = false;
+                self.output.clear();
+                return;
+            }
+            _ => encode_reply(&self.controller.answer_line(line)),
+        };
+        // A reply held back from the previous line goes out first: it is now stale.
+        if let Some(late) = self.held_back.take() {
+            self.output.extend_from_slice(&late);
+        }
+        let draw = self.faults.draw(index);
+        match fault {
+            Some(Fault::NoReply) => {}
+            Some(Fault::LateReply) => self.held_back = Some(reply),
+            Some(Fault::GarbledReply) => self.output.extend_from_slice(&garble(reply, draw)),
+            Some(Fault::PartialReply) => self.output.extend_from_slice(cut(&reply, draw)),
+            Some(Fault::Dropout { queries }) => {
+                self.controller.start_dropout(queries);
+                self.output.extend_from_slice(&reply);
+            }
+            None | Some(Fault::Busy) | Some(Fault::Disconnect { .. }) => self.output.extend_from_slice(&reply),
+        }
+    }
+}
+
+fn busy() -> Reply {
+    Reply::Error {
+        code: metaplate_ldv_protocol::ErrorCode::Busy,
+        text: metaplate_ldv_protocol::ErrorText::lossy("under front-panel control; retry after 100 ms"),
+    }
+}
+
+/// Sets the top bit of one byte before the terminator (CR LF), chosen by `draw`.
+fn garble(mut reply: Vec<u8>, draw: u64) -> Vec<u8> {
+    let content = reply.len().saturating_sub(2).max(1) as u64;
+    if let Some(byte) = usize::try_from(draw % content).ok().and_then(|i| reply.get_mut(i)) {
+        *byte |= 0x80;
+    }
+    reply
+}
+
+/// A prefix of the reply without its terminator: 1 to (content length) bytes, chosen by `draw`.
+fn cut(reply: &[u8], draw: u64) -> &[u8] {
+    let content = reply.len().saturating_sub(2).max(1) as u64;
+    let len = usize::try_from(1 + draw % content).unwrap_or(1);
+    reply.get(..len).unwrap_or(reply)
+}
+
+/// The specified time from a command's terminator to its reply, s (protocol section 6): moves 2 ms plus
+/// 0.5 ms per degree are approximated by their 5 mm grid-step value; `SIG?` 20 ms; `LASER ON` 1 s; `*RST` 2 s;
+/// everything else 1 ms.
+fn response_time_s(command: &Command) -> f64 {
+    match command {
+        Command::MoveTo(_) | Command::MoveToAngles(_) => 0.0022,
+        Command::QuerySignal | Command::SetVelocityRange(_) => 0.02,
+        Command::SetLaser(LaserState::On) => 1.0,
+        Command::Reset => 2.0,
+        _ => 0.001,
+    }
+}

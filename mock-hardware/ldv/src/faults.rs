@@ -1,0 +1,116 @@
+//! The fault schedule: which received line suffers which fault, scripted or drawn from a seed.
+
+use std::collections::BTreeMap;
+
+use crate::speckle::{mix, unit};
+
+/// A fault applied to the reply of one received line (lines count from 0 at power-on, every non-blank line,
+/// `SYNC` included).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Fault {
+    /// The line gets no reply at all (the driver times out).
+    NoReply,
+    /// The reply is held back and sent just before the reply to the next line, where it is stale.
+    LateReply,
+    /// One byte of the reply (chosen by the seed) gets its top bit set: never valid ASCII, so it cannot decode.
+    GarbledReply,
+    /// Only a prefix of the reply is sent (at least 1 byte, no terminator; length chosen by the seed).
+    PartialReply,
+    /// The controller answers `ERR 7` (busy) instead of carrying the command out.
+    Busy,
+    /// The line is lost and the link goes down: every read and write fails until the host reopens. With
+    /// `power_cycle`, the controller comes back with power-on defaults (laser off, default range), as after a
+    /// power failure.
+    Disconnect {
+        /// Whether the controller loses its settings.
+        power_cycle: bool,
+    },
+    /// The line is answered normally, and the next `queries` `SIG?` queries report a dropout.
+    Dropout {
+        /// How many signal queries read low.
+        queries: u32,
+    },
+}
+
+/// Faults by received-line index, and the seed that places garbled bytes and partial cuts.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FaultSchedule {
+    seed: u64,
+    events: BTreeMap<u64, Fault>,
+}
+
+impl FaultSchedule {
+    /// No faults.
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// A scripted schedule: `events` as (line index, fault); a later entry for the same line replaces an earlier
+    /// one. `seed` places garbled bytes and partial cuts.
+    pub fn scripted(seed: u64, events: impl IntoIterator<Item = (u64, Fault)>) -> Self {
+        Self { seed, events: events.into_iter().collect() }
+    }
+
+    /// A random schedule over lines `0..lines`: each line independently suffers a fault with probability
+    /// `rate` (valid range 0 to 1; NaN counts as 0, values beyond are clamped), its kind drawn uniformly from
+    /// `kinds` (no faults when `kinds` is empty). Deterministic: the same arguments give the same schedule.
+    pub fn random(seed: u64, rate: f64, lines: u64, kinds: &[Fault]) -> Self {
+        let rate = if rate.is_nan() { 0.0 } else { rate.clamp(0.0, 1.0) };
+        let events = (0..lines)
+            .filter_map(|line| {
+                let draw = mix(seed ^ mix(line));
+                let count = u64::try_from(kinds.len()).ok().filter(|&n| n > 0)?;
+                let kind = usize::try_from(mix(draw) % count).ok().and_then(|i| kinds.get(i))?;
+                (unit(draw) < rate).then_some((line, *kind))
+            })
+            .collect();
+        Self { seed, events }
+    }
+
+    /// The fault scheduled for line `line`, if any.
+    pub fn fault_at(&self, line: u64) -> Option<Fault> {
+        self.events.get(&line).copied()
+    }
+
+    /// Every scheduled fault, by line.
+    pub fn events(&self) -> impl Iterator<Item = (u64, Fault)> + '_ {
+        self.events.iter().map(|(&line, &fault)| (line, fault))
+    }
+
+    /// A number from the seed for line `line`, to place a garbled byte or a cut deterministically.
+    pub(crate) fn draw(&self, line: u64) -> u64 {
+        mix(self.seed.wrapping_add(0x5EED) ^ mix(line))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn random_schedule_is_deterministic_and_near_its_rate() {
+        let kinds = [Fault::NoReply, Fault::GarbledReply, Fault::PartialReply];
+        let a = FaultSchedule::random(42, 0.1, 10_000, &kinds);
+        assert_eq!(a, FaultSchedule::random(42, 0.1, 10_000, &kinds));
+        assert_ne!(a, FaultSchedule::random(43, 0.1, 10_000, &kinds));
+        let n = a.events().count() as f64;
+        // Binomial(10000, 0.1): sd 30; 5 sd either side.
+        assert!((n - 1000.0).abs() < 150.0, "{n} faults");
+        for kind in kinds {
+            let k = a.events().filter(|&(_, f)| f == kind).count() as f64;
+            // About a third each; 5 sd of a binomial(1000, 1/3) is 75.
+            assert!((k - n / 3.0).abs() < 75.0, "{kind:?}: {k}");
+        }
+    }
+
+    #[test]
+    fn random_schedule_extremes() {
+        let kinds = [Fault::NoReply];
+        assert_eq!(FaultSchedule::random(1, 0.0, 1000, &kinds).events().count(), 0);
+        assert_eq!(FaultSchedule::random(1, f64::NAN, 1000, &kinds).events().count(), 0);
+        assert_eq!(FaultSchedule::random(1, 1.0, 1000, &kinds).events().count(), 1000);
+        assert_eq!(FaultSchedule::random(1, 5.0, 1000, &kinds).events().count(), 1000);
+        assert_eq!(FaultSchedule::random(1, 1.0, 1000, &[]).events().count(), 0);
+        assert_eq!(FaultSchedule::random(1, 1.0, 0, &kinds).events().count(), 0);
+    }
+}
