@@ -1,5 +1,8 @@
 //! The `metaplate` binary end to end: each command as a user runs it, its output checked.
 
+// Helpers outside #[test] functions unwrap too: a failure there is a failed test.
+#![allow(clippy::unwrap_used)]
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
