@@ -1,15 +1,18 @@
 //! Benchmarks of the per-point processing.
 //!
 //! `point_deconvolution`: one grid point, 8 actuators, each a 5 x 3 s paper sweep at 24 kHz recorded as velocity and
-//! loopback (with 30 ppm drift, a latency and noise), through `process_channel`. Target: 50 ms on one core, under
-//! 1 % of the 120 s the acquisition of a point takes.
+//! loopback (with 30 ppm drift, a latency and noise), through `PreparedLayout::process_channel` with the layout
+//! prepared once (as a scan does, for every point). Target: 50 ms on one core, under 1 % of the 120 s the
+//! acquisition of a point takes. Single-threaded: the channels are processed one after the other on one thread.
+//!
+//! `point_deconvolution_unprepared`: the same through `process_channel`, which prepares the layout per channel.
 
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use metaplate_dsp::conv::convolve;
 use metaplate_dsp::deconv::DeconvConfig;
-use metaplate_dsp::pipeline::{RepetitionLayout, process_channel};
+use metaplate_dsp::pipeline::{PreparedLayout, RepetitionLayout, process_channel};
 use metaplate_dsp::sweep::SweepSpec;
 
 const ACTUATORS: usize = 8;
@@ -55,12 +58,21 @@ fn point_deconvolution(c: &mut Criterion) {
     let layout = RepetitionLayout { excitation, repetitions: 5 };
     let cfg = DeconvConfig::paper();
     let channels: Vec<(Vec<f64>, Vec<f64>)> = (0..ACTUATORS).map(|a| acquisition(&layout, a)).collect();
+    let Ok(prepared) = PreparedLayout::new(&layout, &cfg) else { return };
     for (a, (velocity, loopback)) in channels.iter().enumerate() {
         // A failing channel would time an early return, not the work.
-        let result = process_channel(velocity, loopback, &layout, &cfg);
+        let result = prepared.process_channel(velocity, loopback);
         assert!(result.is_ok(), "actuator {a}: {result:?}");
     }
     c.bench_function("point_deconvolution", |b| {
+        b.iter(|| {
+            for (velocity, loopback) in &channels {
+                let out = prepared.process_channel(black_box(velocity), black_box(loopback));
+                black_box(out.is_ok());
+            }
+        })
+    });
+    c.bench_function("point_deconvolution_unprepared", |b| {
         b.iter(|| {
             for (velocity, loopback) in &channels {
                 let out = process_channel(black_box(velocity), black_box(loopback), &layout, &cfg);

@@ -86,6 +86,8 @@ pub fn average_spectra(
 trait Sample: Copy + Default + Add<Output = Self> + Sub<Output = Self> + Mul<f64, Output = Self> {
     fn power(self) -> f64;
     fn is_finite(self) -> bool;
+    /// 0 for a finite sample, NaN otherwise (each component times 0, summed).
+    fn zero_probe(self) -> f64;
 }
 
 impl Sample for f64 {
@@ -95,6 +97,9 @@ impl Sample for f64 {
     fn is_finite(self) -> bool {
         f64::is_finite(self)
     }
+    fn zero_probe(self) -> f64 {
+        self * 0.0
+    }
 }
 
 impl Sample for Complex64 {
@@ -103,6 +108,33 @@ impl Sample for Complex64 {
     }
     fn is_finite(self) -> bool {
         self.re.is_finite() && self.im.is_finite()
+    }
+    fn zero_probe(self) -> f64 {
+        self.re * 0.0 + self.im * 0.0
+    }
+}
+
+/// True when every sample is finite: a NaN probe survives any sum, so one pass without early exit decides, in
+/// four partial sums the compiler keeps in vector registers.
+fn all_finite<T: Sample>(x: &[T]) -> bool {
+    let mut acc = [0.0f64; 4];
+    let (chunks, rest) = x.as_chunks::<4>();
+    for c in chunks {
+        for (a, v) in acc.iter_mut().zip(c) {
+            *a += v.zero_probe();
+        }
+    }
+    rest.iter().all(|v| v.is_finite()) && acc.iter().sum::<f64>() == 0.0
+}
+
+/// Bins `first..last` outside which every gain is 0 (all bins without gains): only they count in the energies.
+fn weighted_bins(n: usize, bin_gains: Option<&[f64]>) -> std::ops::Range<usize> {
+    match bin_gains {
+        None => 0..n,
+        Some(g) => match (g.iter().position(|&v| v > 0.0), g.iter().rposition(|&v| v > 0.0)) {
+            (Some(first), Some(last)) => first..last + 1,
+            _ => 0..0,
+        },
     }
 }
 
@@ -143,27 +175,24 @@ fn average_impl<T: Sample>(
             *m = *m + x * (w / total_weight);
         }
     }
-    let gain2: Vec<f64> = match bin_gains {
-        Some(g) => g.iter().map(|v| v * v).collect(),
-        None => vec![1.0; n],
-    };
+    // Bins of zero gain add exactly 0 to the energies: skipping them (most of the bins for a narrow band) changes
+    // no sum.
+    let bins = weighted_bins(n, bin_gains);
+    let gain2 = |k: usize| bin_gains.map_or(1.0, |g| g[k] * g[k]);
     let (noise_energy, signal_energy) = if repetitions.len() < 2 {
         (None, None)
     } else {
         let spread: f64 = repetitions
             .iter()
             .zip(weights)
-            .map(|(rep, &w)| {
-                w * rep.iter().zip(&mean).zip(&gain2).map(|((&x, &m), g)| g * (x - m).power()).sum::<f64>()
-            })
+            .map(|(rep, &w)| w * bins.clone().map(|k| gain2(k) * (rep[k] - mean[k]).power()).sum::<f64>())
             .sum();
         let noise = spread / (repetitions.len() - 1) as f64 / total_weight;
-        let mean_energy: f64 = mean.iter().zip(&gain2).map(|(&m, g)| g * m.power()).sum();
+        let mean_energy: f64 = bins.map(|k| gain2(k) * mean[k].power()).sum();
         (Some(noise), Some((mean_energy - noise).max(0.0)))
     };
-    let finite = mean.iter().all(|x| x.is_finite())
-        && noise_energy.is_none_or(f64::is_finite)
-        && signal_energy.is_none_or(f64::is_finite);
+    let finite =
+        all_finite(&mean) && noise_energy.is_none_or(f64::is_finite) && signal_energy.is_none_or(f64::is_finite);
     if !finite {
         return Err(DspError::NonFiniteResult { what: "coherent average" });
     }
@@ -181,7 +210,8 @@ fn check_repetitions<T: Sample>(repetitions: &[&[T]]) -> Result<usize, DspError>
         if rep.len() != n {
             return Err(DspError::LengthMismatch { what: "repetitions", a: n, b: rep.len() });
         }
-        if let Some(index) = rep.iter().position(|x| !x.is_finite()) {
+        if !all_finite(rep) {
+            let index = rep.iter().position(|x| !x.is_finite()).unwrap_or(0);
             return Err(DspError::NonFinite { input: "repetition", index, value: f64::NAN });
         }
     }

@@ -1,6 +1,6 @@
 //! Clock drift between the player (audio interface) and the recorder (DAQ): where each repetition of an excitation
-//! lies in a recording, the straight line through those positions (latency and drift), and the band-limited
-//! resampling that puts a recording back on the player's clock.
+//! lies in a recording, and the straight line through those positions (latency and drift). The band-limited
+//! resampling that puts a recording back on the player's clock is [`crate::resample`] (re-exported here).
 //!
 //! Model: player sample `j` is recorded at recorder position `latency_samples + j * (1 + drift_ppm * 1e-6)`.
 //! Valid range: `|drift_ppm| <= MAX_DRIFT_PPM` and a latency that keeps every repetition inside the recording.
@@ -14,13 +14,13 @@
 //! stretched by the drift and removes it, so the positions are the repetitions' starts.
 
 use std::f64::consts::PI;
-use std::sync::OnceLock;
 
 use num_complex::Complex64;
 
 use crate::band::BandLimit;
 use crate::error::{DspError, check_finite, check_result, check_sample_rate, check_signal};
 use crate::fft;
+pub use crate::resample::{Interpolator, MAX_RESAMPLE_LEN};
 
 /// Largest clock drift accepted, ppm. Real converters are within tens of ppm; 1000 ppm means a wrong sample rate.
 pub const MAX_DRIFT_PPM: f64 = 1000.0;
@@ -41,12 +41,6 @@ pub const MAX_FIT_RESIDUAL_SAMPLES: f64 = 1.0;
 /// it the first pass's windows sit within twice that of their copies, inside the first 5 ms (120 samples at
 /// 24 kHz) of a faded excitation, where the paper's sweep stays below 2e-3 of full scale.
 const REFINE_STRETCH_SAMPLES: f64 = 4.0;
-
-/// log2 of [`Interpolator::PHASES`].
-const PHASE_BITS: u32 = 12;
-
-/// Longest output of [`Interpolator::resample`]: 2^27 samples (about 93 minutes at 24 kHz).
-pub const MAX_RESAMPLE_LEN: usize = 1 << 27;
 
 /// Delay of a signal relative to a template, from [`delay_from_spectra`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,17 +81,17 @@ pub fn delay_from_spectra(
     {
         return Err(DspError::LengthMismatch { what: "bin gains", a: g.len(), b: bins });
     }
-    for (input, s) in [("signal spectrum", signal), ("template spectrum", template)] {
-        if let Some(index) = s.iter().position(|c| !(c.re.is_finite() && c.im.is_finite())) {
-            return Err(DspError::NonFinite { input, index, value: f64::NAN });
-        }
-    }
-    let gain2 = |k: usize| bin_gains.map_or(1.0, |g| g[k] * g[k]);
-    let cross = |k: usize| signal[k] * template[k].conj() * gain2(k);
-    // Bins strictly between DC and Nyquist (those two are real and carry no phase slope), and within them only the
-    // span where the gains are non-zero: a band is often a few percent of the bins.
+    fft::check_spectrum_finite("signal spectrum", signal)?;
+    fft::check_spectrum_finite("template spectrum", template)?;
+    delay_over_span(signal, template, n, bin_gains, weighted_span(n, bin_gains))
+}
+
+/// Bins `(first, last)` that carry a phase slope and weight: strictly between DC and Nyquist (those two are real),
+/// and within them the span where the gains are non-zero (a band is often a few percent of the bins). Empty when
+/// `first > last`.
+fn weighted_span(n: usize, bin_gains: Option<&[f64]>) -> (usize, usize) {
     let top = (n - 1) / 2;
-    let (first, last) = match bin_gains {
+    match bin_gains {
         _ if top == 0 => (1, 0),
         Some(g) => {
             let inner = &g[1..=top];
@@ -107,7 +101,21 @@ pub fn delay_from_spectra(
             }
         }
         None => (1, top),
-    };
+    }
+}
+
+/// [`delay_from_spectra`] over the bins `first..=last` (from [`weighted_span`]) of spectra whose lengths have been
+/// checked. Only those bins are read, so only their finiteness matters: a non-finite one makes the energies
+/// non-finite, reported as [`DspError::NonFinite`].
+fn delay_over_span(
+    signal: &[Complex64],
+    template: &[Complex64],
+    n: usize,
+    bin_gains: Option<&[f64]>,
+    (first, last): (usize, usize),
+) -> Result<DelayEstimate, DspError> {
+    let gain2 = |k: usize| bin_gains.map_or(1.0, |g| g[k] * g[k]);
+    let cross = |k: usize| signal[k] * template[k].conj() * gain2(k);
     let (mut step, mut signal_energy, mut template_energy) = (Complex64::new(0.0, 0.0), 0.0, 0.0);
     let mut previous = cross(first);
     for k in first..=last {
@@ -119,6 +127,12 @@ pub fn delay_from_spectra(
             step += next * previous.conj();
             previous = next;
         }
+    }
+    if !(signal_energy.is_finite() && template_energy.is_finite() && step.re.is_finite() && step.im.is_finite()) {
+        // Rare: find the culprit for the message (or report the span's first bin if only the sums overflowed).
+        let bad = |c: &Complex64| !(c.re.is_finite() && c.im.is_finite());
+        let index = (first..=last).find(|&k| bad(&signal[k]) || bad(&template[k])).unwrap_or(first);
+        return Err(DspError::NonFinite { input: "spectra in the band", index, value: f64::NAN });
     }
     let norm = (signal_energy * template_energy).sqrt();
     if step.norm() == 0.0 || !(norm > 0.0 && norm.is_finite()) {
@@ -178,13 +192,15 @@ fn onset(x: &[f64]) -> Option<usize> {
 
 /// Start positions of `repetitions` back-to-back copies of `excitation` in `recording` (a loopback), in recorder
 /// samples from the recording's first sample, with sub-sample resolution (see the module documentation). With a
-/// single copy the drift is unknown and its stretch biases the position by up to `2 |drift| * len` samples. `band` restricts
-/// the estimate to where the excitation has its energy (`None`: all bins).
+/// single copy the drift is unknown and its stretch biases the position by up to `2 |drift| * len` samples. `band`
+/// restricts the estimate to where the excitation has its energy (`None`: all bins).
 ///
 /// Valid range: an excitation of at least 2 samples that starts and ends quietly (a faded sweep; an abrupt one
 /// biases the first and last positions, which border silence); copies played back to back at the excitation's
 /// length; `|drift| <= MAX_DRIFT_PPM`; the first copy starting within the recording, the recording holding all
 /// copies. A noisy loopback is fine as long as each copy's coherence stays above [`MIN_COHERENCE`].
+///
+/// Locating copies of one excitation in many recordings: prepare it once with [`ExcitationTemplate::new`].
 ///
 /// # Errors
 /// Empty or non-finite input, `repetitions == 0`, an invalid band or sample rate; [`DspError::InvalidParameter`]
@@ -197,54 +213,124 @@ pub fn locate_repetitions(
     band: Option<&BandLimit>,
     sample_rate_hz: f64,
 ) -> Result<Vec<f64>, DspError> {
-    check_signal("excitation", excitation)?;
-    check_sample_rate(sample_rate_hz)?;
-    let n = excitation.len();
-    let gains = match band {
-        Some(b) => {
-            b.validate()?;
-            Some(b.bin_gains(n, sample_rate_hz))
-        }
-        None => None,
-    };
-    let template = fft::forward(excitation, n)?;
-    locate_with_template(recording, excitation, &template, repetitions, gains.as_deref())
+    ExcitationTemplate::new(excitation, band, sample_rate_hz)?.locate(recording, repetitions)
 }
 
-/// [`locate_repetitions`] with the excitation's spectrum and bin gains already computed (length `excitation.len()`).
-pub(crate) fn locate_with_template(
-    recording: &[f64],
-    excitation: &[f64],
-    template: &[Complex64],
-    repetitions: usize,
-    bin_gains: Option<&[f64]>,
-) -> Result<Vec<f64>, DspError> {
-    check_signal("recording", recording)?;
-    if repetitions == 0 {
-        return Err(DspError::InvalidParameter { name: "repetitions", reason: "must be at least 1".into() });
-    }
-    let n = excitation.len();
-    let (Some(rec_onset), Some(exc_onset)) = (onset(recording), onset(excitation)) else {
-        return Err(not_found("is silent (or the excitation is): no repetition to locate".into()));
-    };
-    let mut finder = Finder { recording, template, bin_gains, window: vec![0.0; n], blank: 0 };
-    let mut positions: Vec<f64> = Vec::with_capacity(repetitions);
-    for r in 0..repetitions {
-        let predicted = match positions.as_slice() {
-            [] => rec_onset as f64 - exc_onset as f64,
-            [p0] => p0 + n as f64,
-            // Extrapolate the line through the positions so far: carries the drift forward.
-            ps => {
-                let (a, b) = fit_line(ps);
-                a + b * r as f64
+/// An excitation prepared for locating its copies and measuring delays against it: its spectrum, its band's bin
+/// gains and the span of bins they weight, and its onset, computed once for every recording of it (every actuator
+/// at every grid point).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExcitationTemplate {
+    excitation: Vec<f64>,
+    spectrum: Vec<Complex64>,
+    gains: Option<Vec<f64>>,
+    /// Bins weighted by the delay estimate, from [`weighted_span`].
+    span: (usize, usize),
+    /// First sample at half the peak magnitude; `None` for a silent excitation.
+    onset: Option<usize>,
+}
+
+impl ExcitationTemplate {
+    /// Prepares `excitation` (one period, at `sample_rate_hz`) with the band `band` (`None`: all bins).
+    ///
+    /// Valid range: as [`locate_repetitions`]: a finite excitation of at least 2 samples, a valid band, a finite
+    /// positive sample rate.
+    ///
+    /// # Errors
+    /// [`DspError::Empty`] / [`DspError::NonFinite`] for the excitation, [`DspError::InvalidParameter`] for one of a
+    /// single sample, the band's own errors, or a bad sample rate.
+    pub fn new(excitation: &[f64], band: Option<&BandLimit>, sample_rate_hz: f64) -> Result<Self, DspError> {
+        check_signal("excitation", excitation)?;
+        check_sample_rate(sample_rate_hz)?;
+        let n = excitation.len();
+        if n < 2 {
+            return Err(DspError::InvalidParameter { name: "excitation", reason: "needs at least 2 samples".into() });
+        }
+        let gains = match band {
+            Some(b) => {
+                b.validate()?;
+                Some(b.bin_gains(n, sample_rate_hz))
             }
+            None => None,
         };
-        positions.push(finder.find(r, predicted)?);
+        Ok(Self {
+            excitation: excitation.to_vec(),
+            spectrum: fft::forward(excitation, n)?,
+            span: weighted_span(n, gains.as_deref()),
+            gains,
+            onset: onset(excitation),
+        })
     }
-    if repetitions >= 2 {
-        refine(&mut finder, excitation, &mut positions)?;
+
+    /// The excitation's length, samples: the period of its repetitions and the FFT length of its spectrum.
+    pub fn period_samples(&self) -> usize {
+        self.excitation.len()
     }
-    Ok(positions)
+
+    /// The `n / 2 + 1` bins of the excitation's length-`n` FFT, unnormalised.
+    pub fn spectrum(&self) -> &[Complex64] {
+        &self.spectrum
+    }
+
+    /// The band's gains on those bins; `None` without a band.
+    pub fn bin_gains(&self) -> Option<&[f64]> {
+        self.gains.as_deref()
+    }
+
+    /// Start positions of `repetitions` copies in `recording`: [`locate_repetitions`] with this excitation and band.
+    ///
+    /// # Errors
+    /// As [`locate_repetitions`].
+    pub fn locate(&self, recording: &[f64], repetitions: usize) -> Result<Vec<f64>, DspError> {
+        check_signal("recording", recording)?;
+        self.locate_in_checked(recording, repetitions)
+    }
+
+    /// [`ExcitationTemplate::locate`] in a recording already checked non-empty and finite (a pass over a long
+    /// recording saved).
+    pub(crate) fn locate_in_checked(&self, recording: &[f64], repetitions: usize) -> Result<Vec<f64>, DspError> {
+        if repetitions == 0 {
+            return Err(DspError::InvalidParameter { name: "repetitions", reason: "must be at least 1".into() });
+        }
+        let n = self.period_samples();
+        let (Some(rec_onset), Some(exc_onset)) = (onset(recording), self.onset) else {
+            return Err(not_found("is silent (or the excitation is): no repetition to locate".into()));
+        };
+        let mut finder = Finder::new(self, recording);
+        let mut positions: Vec<f64> = Vec::with_capacity(repetitions);
+        for r in 0..repetitions {
+            let predicted = match positions.as_slice() {
+                [] => rec_onset as f64 - exc_onset as f64,
+                [p0] => p0 + n as f64,
+                // Extrapolate the line through the positions so far: carries the drift forward.
+                ps => {
+                    let (a, b) = fit_line(ps);
+                    a + b * r as f64
+                }
+            };
+            positions.push(finder.find(r, predicted)?);
+        }
+        if repetitions >= 2 {
+            refine(&mut finder, &mut positions)?;
+        }
+        Ok(positions)
+    }
+
+    /// Circular delay of a length-`n` signal, given as its `n / 2 + 1` FFT bins, relative to the excitation, over the
+    /// band: [`delay_from_spectra`] against this template.
+    ///
+    /// # Errors
+    /// As [`delay_from_spectra`].
+    pub fn delay_of(&self, spectrum: &[Complex64]) -> Result<DelayEstimate, DspError> {
+        if spectrum.len() != self.spectrum.len() {
+            return Err(DspError::LengthMismatch {
+                what: "signal spectrum",
+                a: spectrum.len(),
+                b: self.spectrum.len(),
+            });
+        }
+        delay_over_span(spectrum, &self.spectrum, self.period_samples(), self.bin_gains(), self.span)
+    }
 }
 
 /// Second pass over the positions once the drift is roughly known (from the first pass's line).
@@ -258,8 +344,9 @@ pub(crate) fn locate_with_template(
 /// `REFINE_STRETCH_SAMPLES` that matters, and the copies are measured again: each window starts at its copy, and
 /// everything after the copy's end is blanked (a copy shorter than the window would leave it to the next copy's
 /// start, or to silence after the last one), so every window holds one copy and nothing else, in the same place.
-fn refine(finder: &mut Finder<'_>, excitation: &[f64], positions: &mut [f64]) -> Result<(), DspError> {
-    let n = excitation.len();
+fn refine(finder: &mut Finder<'_>, positions: &mut [f64]) -> Result<(), DspError> {
+    let template = finder.template;
+    let n = template.period_samples();
     let (_, span) = fit_line(positions);
     let ratio = span / n as f64;
     // Far outside the accepted drift the line is meaningless; `fit_clock` refuses it with a clear message.
@@ -268,11 +355,12 @@ fn refine(finder: &mut Finder<'_>, excitation: &[f64], positions: &mut [f64]) ->
     }
     finder.blank = if span < n as f64 { ((n as f64 - span).ceil() as usize).min(n / 2) } else { 0 };
     // Only the weighted bins count: the kernel need only be accurate up to the last of them.
-    let top_bin = finder.bin_gains.and_then(|g| g.iter().rposition(|&v| v > 0.0)).unwrap_or(n / 2);
+    let top_bin = template.gains.as_deref().and_then(|g| g.iter().rposition(|&v| v > 0.0)).unwrap_or(n / 2);
     let interpolator = Interpolator::for_band(top_bin as f64 / n as f64, 1.0);
-    let mut stretched = interpolator.resample(excitation, 0.0, 1.0 / ratio, n)?;
+    let mut stretched = interpolator.resample(&template.excitation, 0.0, 1.0 / ratio, n)?;
     stretched[n - finder.blank..].fill(0.0);
-    let bias = delay_from_spectra(&fft::forward(&stretched, n)?, finder.template, n, finder.bin_gains)?.delay_samples;
+    fft::forward_into(&stretched, n, &mut finder.spectrum)?;
+    let bias = template.delay_of(&finder.spectrum)?.delay_samples;
     if (span - n as f64).abs() <= REFINE_STRETCH_SAMPLES {
         // The first pass's windows were close enough: only the bias needs removing.
         positions.iter_mut().for_each(|p| *p -= bias);
@@ -303,15 +391,27 @@ fn not_found(reason: String) -> DspError {
 
 /// Finds one copy of the excitation near a predicted position of a recording.
 struct Finder<'a> {
+    template: &'a ExcitationTemplate,
     recording: &'a [f64],
-    template: &'a [Complex64],
-    bin_gains: Option<&'a [f64]>,
+    /// Working buffers for one window and its spectrum, reused by every measurement.
     window: Vec<f64>,
+    spectrum: Vec<Complex64>,
     /// Samples zeroed at the window's end.
     blank: usize,
 }
 
-impl Finder<'_> {
+impl<'a> Finder<'a> {
+    fn new(template: &'a ExcitationTemplate, recording: &'a [f64]) -> Self {
+        let n = template.period_samples();
+        Self {
+            template,
+            recording,
+            window: vec![0.0; n],
+            spectrum: vec![Complex64::new(0.0, 0.0); fft::bin_count(n)],
+            blank: 0,
+        }
+    }
+
     /// Position of copy `r`, starting the search at `predicted` (anywhere within half a period of the truth).
     fn find(&mut self, r: usize, predicted: f64) -> Result<f64, DspError> {
         let mut start = predicted.round() as i64;
@@ -338,15 +438,16 @@ impl Finder<'_> {
         }
         // A window inside the recording and without blanking goes to the FFT as it is, without a copy.
         let inside = usize::try_from(start).ok().and_then(|s| self.recording.get(s..s + n));
-        let spectrum = match inside {
-            Some(slice) if self.blank == 0 => fft::forward(slice, n)?,
+        match inside {
+            Some(slice) if self.blank == 0 => fft::forward_into(slice, n, &mut self.spectrum)?,
             _ => {
                 fill_window(self.recording, start, &mut self.window);
                 self.window[n - self.blank..].fill(0.0);
-                fft::forward(&self.window, n)?
+                fft::forward_into(&self.window, n, &mut self.spectrum)?
             }
         };
-        delay_from_spectra(&spectrum, self.template, n, self.bin_gains)
+        self.template
+            .delay_of(&self.spectrum)
             .map_err(|_| not_found(format!("holds nothing of the excitation where repetition {r} should be")))
     }
 }
@@ -407,7 +508,8 @@ impl ClockFit {
 /// position `r` is modelled as `latency + r * period_samples * (1 + drift_ppm * 1e-6)`.
 ///
 /// Valid range: at least 2 finite positions (one gives no slope); `period_samples >= 1`; the fitted drift within
-/// `MAX_DRIFT_PPM` (plus [`DRIFT_SLACK_PPM`] for estimation noise); positions within [`MAX_FIT_RESIDUAL_SAMPLES`] rms of the line.
+/// `MAX_DRIFT_PPM` (plus [`DRIFT_SLACK_PPM`] for estimation noise); positions within [`MAX_FIT_RESIDUAL_SAMPLES`]
+/// rms of the line.
 ///
 /// # Errors
 /// [`DspError::InvalidParameter`] for fewer than 2 positions, a zero period, a drift out of range, or positions off
@@ -445,231 +547,6 @@ pub fn fit_clock(positions: &[f64], period_samples: usize) -> Result<ClockFit, D
     Ok(ClockFit { latency_samples: a, drift_ppm, residual_rms_samples })
 }
 
-/// Band-limited interpolation by a Kaiser-windowed sinc, tabulated at [`Interpolator::PHASES`] fractional positions.
-///
-/// Accuracy on a full-scale sinusoid (worst error over fractional positions, measured in the tests), including the
-/// table's rounding of the position to 1 / 8192 sample (a phase error of `2 pi f / 8192`, 1e-5 at 0.01 fs):
-/// half-width 4: 2e-4 up to 0.1 fs; half-width 8: 3e-4 up to 0.3 fs; half-width 16: 4e-4 up to 0.4 fs. Above that
-/// the kernel attenuates towards Nyquist. [`Interpolator::for_band`] picks the shortest that suits a band.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Interpolator {
-    half_width: usize,
-    /// Row `p` holds the `2 * half_width` taps for fractional position `p / PHASES`, normalised to unit sum.
-    table: Vec<f64>,
-}
-
-impl Interpolator {
-    /// Fractional positions tabulated per sample.
-    pub const PHASES: usize = 1 << PHASE_BITS;
-    /// Largest half-width accepted, samples.
-    pub const MAX_HALF_WIDTH: usize = 64;
-    /// Kaiser window shape: beta 9 puts the window's sidelobes near -90 dB.
-    const KAISER_BETA: f64 = 9.0;
-
-    /// Builds the table for a kernel reaching `half_width` samples either side.
-    ///
-    /// # Errors
-    /// [`DspError::InvalidParameter`] unless `1 <= half_width <= MAX_HALF_WIDTH`.
-    pub fn new(half_width: usize) -> Result<Self, DspError> {
-        if !(1..=Self::MAX_HALF_WIDTH).contains(&half_width) {
-            return Err(DspError::InvalidParameter {
-                name: "half_width",
-                reason: format!("must lie in 1..={}, got {half_width}", Self::MAX_HALF_WIDTH),
-            });
-        }
-        let taps = 2 * half_width;
-        let h = half_width as f64;
-        let i0_beta = bessel_i0(Self::KAISER_BETA);
-        let mut table = Vec::with_capacity((Self::PHASES + 1) * taps);
-        for p in 0..=Self::PHASES {
-            let mu = p as f64 / Self::PHASES as f64;
-            let row: Vec<f64> = (0..taps)
-                .map(|i| {
-                    let t = mu + h - 1.0 - i as f64;
-                    let u = t / h;
-                    let window =
-                        if u.abs() < 1.0 { bessel_i0(Self::KAISER_BETA * (1.0 - u * u).sqrt()) / i0_beta } else { 0.0 };
-                    sinc(t) * window
-                })
-                .collect();
-            let sum: f64 = row.iter().sum();
-            table.extend(row.iter().map(|v| v / sum));
-        }
-        Ok(Self { half_width, table })
-    }
-
-    /// The shortest shared interpolator (half-width 4, 8 or 16, each built once per process) accurate for content
-    /// up to `max_freq_hz` at `sample_rate_hz` (see the accuracy table on the type); above 0.4 of the sample rate,
-    /// the longest.
-    pub fn for_band(max_freq_hz: f64, sample_rate_hz: f64) -> &'static Self {
-        static SHORT: OnceLock<Interpolator> = OnceLock::new();
-        static MEDIUM: OnceLock<Interpolator> = OnceLock::new();
-        static LONG: OnceLock<Interpolator> = OnceLock::new();
-        let rel = max_freq_hz / sample_rate_hz;
-        let (cell, half_width) = if rel <= 0.1 {
-            (&SHORT, 4)
-        } else if rel <= 0.3 {
-            (&MEDIUM, 8)
-        } else {
-            (&LONG, 16)
-        };
-        cell.get_or_init(|| Self::build(half_width))
-    }
-
-    fn build(half_width: usize) -> Self {
-        match Self::new(half_width) {
-            Ok(i) => i,
-            // Called with 4, 8 or 16 only, so `new` cannot fail; nearest-sample interpolation (one tap at unit
-            // gain) is only a formal fallback.
-            Err(_) => Self { half_width: 1, table: [1.0, 0.0].repeat(Self::PHASES + 1) },
-        }
-    }
-
-    /// Kernel half-width, samples.
-    pub fn half_width(&self) -> usize {
-        self.half_width
-    }
-
-    /// Samples `x` at positions `start_samples + j * step_samples` for `j` in `0..out_len`, treating `x` as zero
-    /// outside its samples.
-    ///
-    /// Valid range: finite `x`; finite `start_samples` within `±MAX_RESAMPLE_LEN`; `0.5 <= step_samples <= 2`;
-    /// `out_len <= MAX_RESAMPLE_LEN`. A step above 1 lowers the rate: content above `0.5 / step_samples` of the
-    /// input rate then aliases, so the input must not have any (true of drift correction, where the step is within
-    /// 1e-3 of 1 and the content far below Nyquist).
-    ///
-    /// # Errors
-    /// [`DspError::NonFinite`] in `x`; [`DspError::InvalidParameter`] for a start or step out of range;
-    /// [`DspError::TooLong`] for `out_len`.
-    pub fn resample(
-        &self,
-        x: &[f64],
-        start_samples: f64,
-        step_samples: f64,
-        out_len: usize,
-    ) -> Result<Vec<f64>, DspError> {
-        check_finite("signal to resample", x)?;
-        let limit = MAX_RESAMPLE_LEN as f64;
-        if !(start_samples.is_finite() && start_samples.abs() <= limit) {
-            return Err(DspError::InvalidParameter {
-                name: "start_samples",
-                reason: format!("must be finite and within ±{limit}, got {start_samples}"),
-            });
-        }
-        if !(0.5..=2.0).contains(&step_samples) {
-            return Err(DspError::InvalidParameter {
-                name: "step_samples",
-                reason: format!("must lie in [0.5, 2], got {step_samples}"),
-            });
-        }
-        if out_len > MAX_RESAMPLE_LEN {
-            return Err(DspError::TooLong { what: "resampled signal", len: out_len, max: MAX_RESAMPLE_LEN });
-        }
-        let mut out = vec![0.0; out_len];
-        // Fixed tap counts let the compiler unroll the inner product: three times faster than the generic loop.
-        match self.half_width {
-            4 => self.fill::<8>(x, start_samples, step_samples, &mut out),
-            8 => self.fill::<16>(x, start_samples, step_samples, &mut out),
-            16 => self.fill::<32>(x, start_samples, step_samples, &mut out),
-            _ => self.fill_any(x, start_samples, step_samples, &mut out),
-        }
-        check_result("resampled signal", &out)?;
-        Ok(out)
-    }
-
-    /// Kernel row and first input index for output position `t`.
-    fn locate(&self, t: f64) -> (usize, i64) {
-        // floor and round by integer conversion: the f64 methods are library calls on baseline x86-64.
-        let mut base = t as i64;
-        if (base as f64) > t {
-            base -= 1;
-        }
-        let phase = ((t - base as f64) * Self::PHASES as f64 + 0.5) as usize;
-        (phase, base - self.half_width as i64 + 1)
-    }
-
-    fn fill<const TAPS: usize>(&self, x: &[f64], start: f64, step: f64, out: &mut [f64]) {
-        let (rows, _) = self.table.as_chunks::<TAPS>();
-        // Positions in fixed point, re-anchored to the exact `start + j * step` every block so that the rounding
-        // of the step (2^-32 sample) cannot accumulate: integer steps replace two float-to-integer conversions per
-        // output, the costliest part of the loop after the taps.
-        const FRAC_BITS: u32 = 32;
-        const BLOCK: usize = 4096;
-        let scale = (1u64 << FRAC_BITS) as f64;
-        let step_fixed = (step * scale).round() as i64;
-        let half_phase = 1i64 << (FRAC_BITS - PHASE_BITS - 1);
-        for (b, block) in out.chunks_mut(BLOCK).enumerate() {
-            let mut pos = ((start + (b * BLOCK) as f64 * step) * scale).round() as i64;
-            for y in block.iter_mut() {
-                // Position rounded to the table's resolution, then split into sample and phase.
-                let rounded = (pos + half_phase) >> (FRAC_BITS - PHASE_BITS);
-                let phase = (rounded & (Self::PHASES as i64 - 1)) as usize;
-                let first = (rounded >> PHASE_BITS) - self.half_width as i64 + 1;
-                let window = usize::try_from(first).ok().and_then(|f| x.get(f..)).and_then(|s| s.first_chunk::<TAPS>());
-                *y = match (rows.get(phase), window) {
-                    (Some(row), Some(input)) => dot_fixed(row, input),
-                    _ => self.edge_sample(x, phase, first),
-                };
-                pos += step_fixed;
-            }
-        }
-    }
-
-    fn fill_any(&self, x: &[f64], start: f64, step: f64, out: &mut [f64]) {
-        let taps = 2 * self.half_width;
-        for (j, y) in out.iter_mut().enumerate() {
-            let (phase, first) = self.locate(start + j as f64 * step);
-            let row = &self.table[phase * taps..(phase + 1) * taps];
-            *y = match usize::try_from(first).ok().and_then(|f| x.get(f..f + taps)) {
-                Some(input) => row.iter().zip(input).map(|(w, v)| w * v).sum(),
-                None => self.edge_sample(x, phase, first),
-            };
-        }
-    }
-
-    /// One output whose kernel overlaps the ends of `x` (zero beyond them).
-    fn edge_sample(&self, x: &[f64], phase: usize, first: i64) -> f64 {
-        let taps = 2 * self.half_width;
-        let row = &self.table[phase * taps..(phase + 1) * taps];
-        row.iter()
-            .enumerate()
-            .map(|(i, w)| {
-                let idx = first + i as i64;
-                if idx >= 0 && (idx as usize) < x.len() { w * x[idx as usize] } else { 0.0 }
-            })
-            .sum()
-    }
-}
-
-/// Inner product of fixed length with four partial sums, which the compiler keeps in vector registers.
-fn dot_fixed<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
-    let mut acc = [0.0; 4];
-    for i in 0..N {
-        acc[i % 4] += a[i] * b[i];
-    }
-    (acc[0] + acc[1]) + (acc[2] + acc[3])
-}
-
-fn sinc(t: f64) -> f64 {
-    if t == 0.0 { 1.0 } else { (PI * t).sin() / (PI * t) }
-}
-
-/// Modified Bessel function of the first kind, order 0, by its power series (converges for all real x; the
-/// arguments here are at most 9, where 40 terms reach full f64 precision).
-fn bessel_i0(x: f64) -> f64 {
-    let q = x * x / 4.0;
-    let mut term = 1.0;
-    let mut sum = 1.0;
-    for k in 1..60 {
-        term *= q / (k * k) as f64;
-        sum += term;
-        if term < sum * 1e-17 {
-            break;
-        }
-    }
-    sum
-}
-
 #[cfg(test)]
 mod tests {
     use rand::{Rng, SeedableRng};
@@ -689,60 +566,6 @@ mod tests {
 
     fn band() -> BandLimit {
         BandLimit::new(300.0, 2500.0, 50.0, 200.0).unwrap()
-    }
-
-    /// Worst error of `interp` on a unit sinusoid at `f` cycles per sample, over positions stepping by `step`.
-    fn worst_error(interp: &Interpolator, f: f64, step: f64) -> f64 {
-        let w = 2.0 * PI * f;
-        let x: Vec<f64> = (0..1000).map(|i| (w * i as f64 + 0.3).sin()).collect();
-        let start = 100.0 + 1.0 / 3.0;
-        let y = interp.resample(&x, start, step, 300).unwrap();
-        y.iter().enumerate().map(|(j, v)| (v - (w * (start + j as f64 * step) + 0.3).sin()).abs()).fold(0.0, f64::max)
-    }
-
-    #[test]
-    fn interpolators_meet_their_documented_accuracy() {
-        // The bounds stated on `Interpolator`; a step just off 1 walks through all fractional positions.
-        let step = 1.0 + 1.0 / 997.0;
-        for (hw, f, bound) in [(4, 0.01, 2e-4), (4, 0.1, 2e-4), (8, 0.3, 3e-4), (16, 0.4, 4e-4)] {
-            let err = worst_error(&Interpolator::new(hw).unwrap(), f, step);
-            assert!(err < bound, "half-width {hw} at {f} fs: {err:e}");
-        }
-        // The step's extremes, on content that survives the halved rate (0.05 fs < 0.25 fs).
-        for step in [0.5, 2.0] {
-            let err = worst_error(&Interpolator::new(8).unwrap(), 0.05, step);
-            assert!(err < 3e-4, "step {step}: {err:e}");
-        }
-        assert_eq!(Interpolator::for_band(675.0, FS).half_width(), 4);
-        assert_eq!(Interpolator::for_band(5000.0, FS).half_width(), 8);
-        assert_eq!(Interpolator::for_band(12_000.0, FS).half_width(), 16);
-    }
-
-    #[test]
-    fn integer_positions_copy_and_outside_is_zero() {
-        let x: Vec<f64> = (0..50).map(|i| (i as f64 * 0.37).cos()).collect();
-        let y = Interpolator::new(8).unwrap().resample(&x, -10.0, 1.0, 70).unwrap();
-        // The kernel at an integer position is one tap of 1 and zeros of sinc(k) = sin(pi k) / (pi k), 1e-17.
-        for (j, v) in y.iter().enumerate() {
-            let expected = if (10..60).contains(&j) { x[j - 10] } else { 0.0 };
-            assert!((v - expected).abs() < 1e-12, "{j}: {v} vs {expected}");
-        }
-    }
-
-    #[test]
-    fn resample_refuses_bad_parameters() {
-        let i = Interpolator::new(4).unwrap();
-        assert!(matches!(i.resample(&[1.0, f64::NAN], 0.0, 1.0, 2), Err(DspError::NonFinite { .. })));
-        assert!(matches!(i.resample(&[1.0], f64::NAN, 1.0, 2), Err(DspError::InvalidParameter { .. })));
-        assert!(matches!(i.resample(&[1.0], 1e12, 1.0, 2), Err(DspError::InvalidParameter { .. })));
-        assert!(matches!(i.resample(&[1.0], 0.0, 0.49, 2), Err(DspError::InvalidParameter { .. })));
-        assert!(matches!(i.resample(&[1.0], 0.0, 2.01, 2), Err(DspError::InvalidParameter { .. })));
-        assert!(matches!(i.resample(&[1.0], 0.0, 1.0, MAX_RESAMPLE_LEN + 1), Err(DspError::TooLong { .. })));
-        assert!(i.resample(&[], 0.0, 1.0, 3).unwrap().iter().all(|v| *v == 0.0));
-        assert!(Interpolator::new(0).is_err());
-        assert!(Interpolator::new(Interpolator::MAX_HALF_WIDTH + 1).is_err());
-        // Odd half-widths take the generic path and agree with the specialised ones in accuracy.
-        assert!(worst_error(&Interpolator::new(5).unwrap(), 0.05, 1.001) < 2e-4);
     }
 
     #[test]
@@ -822,6 +645,40 @@ mod tests {
                 assert!((fit.recorder_position(n as f64) - positions[1]).abs() < 0.01, "{case}");
             }
         }
+    }
+
+    #[test]
+    fn a_prepared_template_locates_and_measures_as_the_free_functions() {
+        let e = sweep();
+        let n = e.len();
+        let b = band();
+        let template = ExcitationTemplate::new(&e, Some(&b), FS).unwrap();
+        assert_eq!(template.period_samples(), n);
+        assert_eq!(template.spectrum(), fft::forward(&e, n).unwrap().as_slice());
+        assert_eq!(template.bin_gains(), Some(b.bin_gains(n, FS).as_slice()));
+        // One template for several recordings (different latencies and drifts): the same positions, bit for bit.
+        for (latency, drift_ppm) in [(0.0, 0.0), (321.7, -250.0), (14_400.3, MAX_DRIFT_PPM)] {
+            let rec = recording(&e, 3, latency, drift_ppm, 500);
+            assert_eq!(template.locate(&rec, 3).unwrap(), locate_repetitions(&rec, &e, 3, Some(&b), FS).unwrap());
+        }
+        // Its delay over the band is `delay_from_spectra`'s, also without a band (all bins).
+        let copy = fft::forward(&delay_circular(&e, 37.25).unwrap(), n).unwrap();
+        let expected = delay_from_spectra(&copy, template.spectrum(), n, template.bin_gains()).unwrap();
+        assert_eq!(template.delay_of(&copy).unwrap(), expected);
+        let full = ExcitationTemplate::new(&e, None, FS).unwrap();
+        assert_eq!(full.delay_of(&copy).unwrap(), delay_from_spectra(&copy, full.spectrum(), n, None).unwrap());
+        assert!(matches!(template.delay_of(&copy[1..]), Err(DspError::LengthMismatch { .. })));
+        let mut bad = copy.clone();
+        bad[100].re = f64::NAN; // in the band (100 bins of 5 Hz: 500 Hz)
+        assert!(matches!(template.delay_of(&bad), Err(DspError::NonFinite { .. })));
+        // The valid range of the excitation, band and sample rate.
+        assert!(matches!(ExcitationTemplate::new(&[], None, FS), Err(DspError::Empty { .. })));
+        assert!(matches!(ExcitationTemplate::new(&[1.0], None, FS), Err(DspError::InvalidParameter { .. })));
+        assert!(matches!(ExcitationTemplate::new(&[1.0, f64::NAN], None, FS), Err(DspError::NonFinite { .. })));
+        assert!(ExcitationTemplate::new(&[1.0, -1.0], None, FS).is_ok());
+        assert!(ExcitationTemplate::new(&e, None, 0.0).is_err());
+        let inverted = BandLimit { lo_hz: 2500.0, hi_hz: 300.0, ..b };
+        assert!(ExcitationTemplate::new(&e, Some(&inverted), FS).is_err());
     }
 
     #[test]

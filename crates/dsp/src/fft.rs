@@ -16,6 +16,74 @@ pub const MAX_FFT_LEN: usize = 1 << 25;
 
 thread_local! {
     static PLANNER: RefCell<RealFftPlanner<f64>> = RefCell::new(RealFftPlanner::new());
+    /// Working buffers reused by every transform on this thread. Allocating them per call cost more than the
+    /// transform itself (fresh pages, zero-filled).
+    static BUFFERS: RefCell<Buffers> = const { RefCell::new(Buffers::EMPTY) };
+}
+
+struct Buffers {
+    /// Copies of the inputs, which realfft overwrites: samples of a forward transform, bins of an inverse one.
+    real: Vec<f64>,
+    bins: Vec<Complex64>,
+    /// realfft's scratch.
+    scratch: Vec<Complex64>,
+}
+
+impl Buffers {
+    const EMPTY: Self = Self { real: Vec::new(), bins: Vec::new(), scratch: Vec::new() };
+}
+
+/// Longest buffer kept between transforms, elements (8 or 16 MiB): a rare huge transform should not pin its buffers
+/// to the thread for good.
+const RETAINED_MAX_LEN: usize = 1 << 20;
+
+/// Runs `f` on this thread's buffers, then frees any grown beyond [`RETAINED_MAX_LEN`].
+fn with_buffers<R>(f: impl FnOnce(&mut Buffers) -> R) -> R {
+    BUFFERS.with(|cell| {
+        let mut buffers = cell.borrow_mut();
+        let result = f(&mut buffers);
+        if buffers.real.capacity() > RETAINED_MAX_LEN {
+            buffers.real = Vec::new();
+        }
+        if buffers.bins.capacity() > RETAINED_MAX_LEN {
+            buffers.bins = Vec::new();
+        }
+        if buffers.scratch.capacity() > RETAINED_MAX_LEN {
+            buffers.scratch = Vec::new();
+        }
+        result
+    })
+}
+
+/// Resizes `v` to `len` without caring what it holds: the caller overwrites every element.
+fn resize_for_overwrite<T: Copy + Default>(v: &mut Vec<T>, len: usize) {
+    if v.len() < len {
+        v.resize(len, T::default());
+    }
+    v.truncate(len);
+}
+
+/// True when every bin is finite: `v * 0` is 0 for a finite value and NaN otherwise, and a NaN survives any sum, so
+/// one pass without early exit decides; four partial sums let the compiler keep them in vector registers.
+pub(crate) fn spectrum_is_finite(x: &[Complex64]) -> bool {
+    let mut acc = [0.0f64; 4];
+    let (chunks, rest) = x.as_chunks::<2>();
+    for c in chunks {
+        acc[0] += c[0].re * 0.0;
+        acc[1] += c[0].im * 0.0;
+        acc[2] += c[1].re * 0.0;
+        acc[3] += c[1].im * 0.0;
+    }
+    rest.iter().all(|c| c.re.is_finite() && c.im.is_finite()) && acc.iter().sum::<f64>() == 0.0
+}
+
+/// [`DspError::NonFinite`] naming `input` and the first non-finite bin, if any.
+pub(crate) fn check_spectrum_finite(input: &'static str, x: &[Complex64]) -> Result<(), DspError> {
+    if spectrum_is_finite(x) {
+        return Ok(());
+    }
+    let index = x.iter().position(|c| !(c.re.is_finite() && c.im.is_finite())).unwrap_or(0);
+    Err(DspError::NonFinite { input, index, value: f64::NAN })
 }
 
 fn check_len(n: usize) -> Result<(), DspError> {
@@ -45,18 +113,61 @@ pub fn bin_freq_hz(k: usize, n: usize, sample_rate_hz: f64) -> f64 {
 /// `n` of 0 or above [`MAX_FFT_LEN`]; a non-finite sample in `x` ([`DspError::NonFinite`]).
 pub fn forward(x: &[f64], n: usize) -> Result<Vec<Complex64>, DspError> {
     check_len(n)?;
+    let mut spectrum = vec![Complex64::new(0.0, 0.0); bin_count(n)];
+    forward_into(x, n, &mut spectrum)?;
+    Ok(spectrum)
+}
+
+/// [`forward`] into a caller's buffer of `n / 2 + 1` bins, which saves allocating one per call in loops.
+///
+/// # Errors
+/// As [`forward`]; [`DspError::LengthMismatch`] when `spectrum.len() != n / 2 + 1`.
+pub fn forward_into(x: &[f64], n: usize, spectrum: &mut [Complex64]) -> Result<(), DspError> {
+    check_len(n)?;
+    if spectrum.len() != bin_count(n) {
+        return Err(DspError::LengthMismatch {
+            what: "forward FFT bins against n / 2 + 1",
+            a: spectrum.len(),
+            b: bin_count(n),
+        });
+    }
     check_finite("FFT input", x)?;
-    let mut input = vec![0.0; n];
-    let copied = x.len().min(n);
-    input[..copied].copy_from_slice(&x[..copied]);
-    let mut output = vec![Complex64::new(0.0, 0.0); bin_count(n)];
-    PLANNER.with(|planner| {
-        let plan = planner.borrow_mut().plan_fft_forward(n);
+    let plan = PLANNER.with(|planner| planner.borrow_mut().plan_fft_forward(n));
+    with_buffers(|Buffers { real, scratch, .. }| {
+        // realfft overwrites its input: work on a copy, padded with zeros (written once, not cleared first).
+        resize_for_overwrite(real, n);
+        let copied = x.len().min(n);
+        real[..copied].copy_from_slice(&x[..copied]);
+        real[copied..].fill(0.0);
+        resize_for_overwrite(scratch, plan.get_scratch_len());
         // Lengths were set up from the plan's own n: process only fails on a length mismatch.
-        plan.process(&mut input, &mut output)
+        plan.process_with_scratch(real, spectrum, scratch)
             .map_err(|e| DspError::InvalidParameter { name: "fft buffers", reason: e.to_string() })
-    })?;
-    Ok(output)
+    })
+}
+
+/// [`forward`] of `x` at its own length `n = x.len()` into a caller's buffer of `n / 2 + 1` bins, using `x` itself as
+/// the transform's working space: `x` holds garbage afterwards. Saves the copy [`forward_into`] makes of its input.
+///
+/// # Errors
+/// An empty `x` or one longer than [`MAX_FFT_LEN`]; a non-finite sample; `spectrum.len() != n / 2 + 1`.
+pub fn forward_destructive(x: &mut [f64], spectrum: &mut [Complex64]) -> Result<(), DspError> {
+    let n = x.len();
+    check_len(n)?;
+    if spectrum.len() != bin_count(n) {
+        return Err(DspError::LengthMismatch {
+            what: "forward FFT bins against n / 2 + 1",
+            a: spectrum.len(),
+            b: bin_count(n),
+        });
+    }
+    check_finite("FFT input", x)?;
+    let plan = PLANNER.with(|planner| planner.borrow_mut().plan_fft_forward(n));
+    with_buffers(|Buffers { scratch, .. }| {
+        resize_for_overwrite(scratch, plan.get_scratch_len());
+        plan.process_with_scratch(x, spectrum, scratch)
+            .map_err(|e| DspError::InvalidParameter { name: "fft buffers", reason: e.to_string() })
+    })
 }
 
 /// Inverse real FFT: `n / 2 + 1` bins back to `n` samples, normalised by `1 / n` so that
@@ -69,6 +180,17 @@ pub fn forward(x: &[f64], n: usize) -> Result<Vec<Complex64>, DspError> {
 /// `n` out of range; `spectrum.len() != n / 2 + 1` ([`DspError::LengthMismatch`]); a non-finite bin.
 pub fn inverse(spectrum: &[Complex64], n: usize) -> Result<Vec<f64>, DspError> {
     check_len(n)?;
+    let mut output = vec![0.0; n];
+    inverse_into(spectrum, n, &mut output)?;
+    Ok(output)
+}
+
+/// [`inverse`] into a caller's buffer of `n` samples.
+///
+/// # Errors
+/// As [`inverse`]; [`DspError::LengthMismatch`] when `output.len() != n`.
+pub fn inverse_into(spectrum: &[Complex64], n: usize, output: &mut [f64]) -> Result<(), DspError> {
+    check_len(n)?;
     if spectrum.len() != bin_count(n) {
         return Err(DspError::LengthMismatch {
             what: "inverse FFT bins against n / 2 + 1",
@@ -76,24 +198,26 @@ pub fn inverse(spectrum: &[Complex64], n: usize) -> Result<Vec<f64>, DspError> {
             b: bin_count(n),
         });
     }
-    if let Some(index) = spectrum.iter().position(|c| !(c.re.is_finite() && c.im.is_finite())) {
-        return Err(DspError::NonFinite { input: "inverse FFT spectrum", index, value: f64::NAN });
+    if output.len() != n {
+        return Err(DspError::LengthMismatch { what: "inverse FFT output against n", a: output.len(), b: n });
     }
-    let mut bins = spectrum.to_vec();
-    bins[0].im = 0.0;
-    if n.is_multiple_of(2) {
-        let last = bins.len() - 1;
-        bins[last].im = 0.0;
-    }
-    let mut output = vec![0.0; n];
-    PLANNER.with(|planner| {
-        let plan = planner.borrow_mut().plan_fft_inverse(n);
-        plan.process(&mut bins, &mut output)
+    check_spectrum_finite("inverse FFT spectrum", spectrum)?;
+    let plan = PLANNER.with(|planner| planner.borrow_mut().plan_fft_inverse(n));
+    with_buffers(|Buffers { bins, scratch, .. }| {
+        bins.clear();
+        bins.extend_from_slice(spectrum);
+        bins[0].im = 0.0;
+        if n.is_multiple_of(2) {
+            let last = bins.len() - 1;
+            bins[last].im = 0.0;
+        }
+        resize_for_overwrite(scratch, plan.get_scratch_len());
+        plan.process_with_scratch(bins, output, scratch)
             .map_err(|e| DspError::InvalidParameter { name: "inverse fft buffers", reason: e.to_string() })
     })?;
     let scale = 1.0 / n as f64;
     output.iter_mut().for_each(|v| *v *= scale);
-    Ok(output)
+    Ok(())
 }
 
 /// Smallest length `>= min_len` whose prime factors are all 2, 3, 5 or 7 (fast for rustfft).
@@ -175,6 +299,52 @@ mod tests {
         let stray =
             y.iter().enumerate().filter(|(i, _)| *i != 12_345 && *i != n - 1).map(|(_, v)| v.abs()).fold(0.0, f64::max);
         assert!(stray < 1e-9, "stray {stray}");
+    }
+
+    #[test]
+    fn buffer_variants_match_the_allocating_ones_exactly() {
+        // Same plan, same arithmetic: bit-identical results, for an even, an odd and a padded length.
+        for (len, n) in [(72, 72), (45, 45), (30, 64)] {
+            let x: Vec<f64> = (0..len).map(|i| ((i * 13 + 5) % 17) as f64 - 8.0).collect();
+            let expected = forward(&x, n).unwrap();
+            let mut spectrum = vec![Complex64::new(9.0, 9.0); bin_count(n)];
+            forward_into(&x, n, &mut spectrum).unwrap();
+            assert_eq!(spectrum, expected);
+            if len == n {
+                let mut scratch_input = x.clone();
+                forward_destructive(&mut scratch_input, &mut spectrum).unwrap();
+                assert_eq!(spectrum, expected);
+            }
+            let mut output = vec![7.0; n];
+            inverse_into(&expected, n, &mut output).unwrap();
+            assert_eq!(output, inverse(&expected, n).unwrap());
+        }
+    }
+
+    #[test]
+    fn buffer_variants_refuse_wrong_lengths_and_non_finite_input() {
+        let mut spectrum = vec![Complex64::new(0.0, 0.0); 3];
+        assert!(matches!(forward_into(&[1.0; 4], 4, &mut spectrum[..2]), Err(DspError::LengthMismatch { .. })));
+        assert!(matches!(forward_destructive(&mut [1.0; 6], &mut spectrum), Err(DspError::LengthMismatch { .. })));
+        assert!(matches!(forward_destructive(&mut [], &mut spectrum), Err(DspError::InvalidParameter { .. })));
+        assert!(matches!(inverse_into(&spectrum, 4, &mut [0.0; 5]), Err(DspError::LengthMismatch { .. })));
+        // A NaN or infinity anywhere, in the part checked eight at a time or in the remainder, is named.
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for index in 0..19 {
+                let mut x = vec![1.0; 19];
+                x[index] = bad;
+                let mut bins = vec![Complex64::new(0.0, 0.0); bin_count(19)];
+                let err = forward_into(&x, 19, &mut bins).unwrap_err();
+                assert!(matches!(err, DspError::NonFinite { index: i, .. } if i == index), "{bad} at {index}: {err}");
+                assert!(matches!(forward_destructive(&mut x, &mut bins), Err(DspError::NonFinite { .. })));
+            }
+        }
+        for index in 0..5 {
+            let mut bins = vec![Complex64::new(1.0, 0.0); 5];
+            bins[index].im = f64::INFINITY;
+            let err = inverse_into(&bins, 8, &mut [0.0; 8]).unwrap_err();
+            assert!(matches!(err, DspError::NonFinite { index: i, .. } if i == index), "{index}: {err}");
+        }
     }
 
     #[test]

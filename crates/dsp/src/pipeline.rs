@@ -22,9 +22,10 @@ use num_complex::Complex64;
 
 use crate::average::average_spectra;
 use crate::deconv::{DeconvConfig, deconvolve_with_reference, divide_spectra};
-use crate::drift::{self, Interpolator, MAX_DRIFT_PPM, delay_from_spectra, fit_clock};
+use crate::drift::{ExcitationTemplate, MAX_DRIFT_PPM, fit_clock};
 use crate::error::{DspError, check_result, check_signal};
 use crate::fft;
+use crate::resample::Interpolator;
 
 /// Samples by which every period starts before its repetition, plus `|drift| * period`. A period that starts a
 /// little early stays exact (see step 3); one that starts late would lose the copy's first samples. The positions
@@ -94,6 +95,9 @@ pub struct ChannelResult {
 /// recording started before the playback); `|drift| <= MAX_DRIFT_PPM`; `cfg` valid with `cfg.ir_len` plus the guard
 /// (16 samples plus `|drift| * period`) within one period, for two repetitions or more.
 ///
+/// This prepares the layout for one channel; channels that share a layout and configuration (the actuators of a
+/// grid point, and every point) save that work with [`PreparedLayout`].
+///
 /// # Errors
 /// Input errors as named ([`DspError::Empty`], [`DspError::NonFinite`], [`DspError::LengthMismatch`]);
 /// [`DspError::InvalidParameter`] naming `recording` when a repetition is not found in the loopback or the
@@ -105,61 +109,116 @@ pub fn process_channel(
     layout: &RepetitionLayout,
     cfg: &DeconvConfig,
 ) -> Result<ChannelResult, DspError> {
-    cfg.validate()?;
-    layout.validate()?;
-    check_signal("velocity", velocity)?;
-    check_signal("loopback", loopback)?;
-    if velocity.len() != loopback.len() {
-        return Err(DspError::LengthMismatch { what: "velocity and loopback", a: velocity.len(), b: loopback.len() });
-    }
-    let n = layout.excitation.len();
-    let gains = cfg.band.map(|b| b.bin_gains(n, cfg.sample_rate_hz));
-    let template = fft::forward(&layout.excitation, n)?;
-    let positions =
-        drift::locate_with_template(loopback, &layout.excitation, &template, layout.repetitions, gains.as_deref())?;
-    if layout.repetitions == 1 {
-        return single_repetition(velocity, loopback, positions[0], n, cfg);
-    }
-    let clock = fit_clock(&positions, n)?;
-    let ratio = clock.ratio();
-    let guard = (clock.drift_ppm.abs() * 1e-6 * n as f64).ceil() as usize + GUARD_SAMPLES;
-    let tail_len = guard + cfg.ir_len;
-    if tail_len > n {
-        return Err(DspError::InvalidParameter {
-            name: "ir_len",
-            reason: format!("{} samples plus a guard of {guard} exceed the period of {n} samples", cfg.ir_len),
-        });
-    }
-    let out_len = layout.repetitions * n + tail_len;
-    let grid_start = clock.latency_samples - guard as f64 * ratio;
-    let grid_end = grid_start + (out_len - 1) as f64 * ratio;
-    if grid_end > (velocity.len() - 1) as f64 {
-        return Err(too_short(velocity.len(), grid_end));
-    }
-    // The shortest kernel accurate over the band and its skirts: beyond them the band limit zeroes the result.
-    let top_hz = cfg.band.map_or(cfg.sample_rate_hz / 2.0, |b| b.hi_hz + b.hi_transition_hz);
-    let interpolator = Interpolator::for_band(top_hz, cfg.sample_rate_hz);
-    let velocity = interpolator.resample(velocity, grid_start, ratio, out_len)?;
-    // The loopback is the played signal itself, so every steady-state period of it is the same. One period, the
-    // second, serves as the reference for all, which saves resampling the rest; its noise (a 16-bit DAQ channel's,
-    // some 80 dB below the signal) then enters the IR unaveraged, at that level.
-    let reference = interpolator.resample(loopback, grid_start + n as f64 * ratio, ratio, n)?;
-    let periods = Periods::new(layout.repetitions, n, tail_len);
+    PreparedLayout::new(layout, cfg)?.process_channel(velocity, loopback)
+}
 
-    let velocity_spectra = periods.spectra(&velocity)?;
-    let spectra: Vec<&[Complex64]> = velocity_spectra.iter().map(Vec::as_slice).collect();
-    let velocity_mean = average_spectra(&spectra, &periods.weights, gains.as_deref())?;
-    let reference = fft::forward(&reference, n)?;
+/// A repetition layout and deconvolution configuration checked and prepared once for every channel that shares
+/// them: the excitation's spectrum, band gains and onset ([`ExcitationTemplate`]) and the resampling kernel.
+/// Immutable once built, so one can serve channels processed on several threads at once.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PreparedLayout {
+    layout: RepetitionLayout,
+    cfg: DeconvConfig,
+    template: ExcitationTemplate,
+    interpolator: &'static Interpolator,
+}
 
-    let response = divide_spectra(&velocity_mean.mean, &reference, gains.as_deref(), cfg.regularisation)?;
-    let ir = to_recorder_clock(&fft::inverse(&response, n)?, ratio, cfg.ir_len, interpolator)?;
+impl PreparedLayout {
+    /// Checks `layout` and `cfg` and prepares them.
+    ///
+    /// # Errors
+    /// As [`RepetitionLayout::validate`] and [`DeconvConfig::validate`].
+    pub fn new(layout: &RepetitionLayout, cfg: &DeconvConfig) -> Result<Self, DspError> {
+        cfg.validate()?;
+        layout.validate()?;
+        // The periodic path builds the response from time 0 on; rather than ignore a request for a two-sided one,
+        // refuse it (one repetition goes through `deconvolve_with_reference`, which honours it).
+        if cfg.pre_samples > 0 && layout.repetitions >= 2 {
+            return Err(DspError::InvalidParameter {
+                name: "pre_samples",
+                reason: format!(
+                    "{} requested, but the periodic pipeline returns responses from time 0: use 0 with {} repetitions",
+                    cfg.pre_samples, layout.repetitions
+                ),
+            });
+        }
+        let template = ExcitationTemplate::new(&layout.excitation, cfg.band.as_ref(), cfg.sample_rate_hz)?;
+        // The shortest kernel accurate over the band and its skirts: beyond them the band limit zeroes the result.
+        let top_hz = cfg.band.map_or(cfg.sample_rate_hz / 2.0, |b| b.hi_hz + b.hi_transition_hz);
+        let interpolator = Interpolator::for_band(top_hz, cfg.sample_rate_hz);
+        Ok(Self { layout: layout.clone(), cfg: *cfg, template, interpolator })
+    }
 
-    // Refine the latency on the resampled loopback, which no longer has a stretch: its offset from the excitation
-    // is where the first repetition starts within the first period.
-    let offset = delay_from_spectra(&reference, &template, n, gains.as_deref())?;
-    let latency_samples = grid_start + offset.delay_samples * ratio;
-    check_latency(latency_samples)?;
-    Ok(ChannelResult { ir, snr_db: velocity_mean.snr_db(), drift_ppm: clock.drift_ppm, latency_samples })
+    /// The layout prepared.
+    pub fn layout(&self) -> &RepetitionLayout {
+        &self.layout
+    }
+
+    /// The configuration prepared.
+    pub fn config(&self) -> &DeconvConfig {
+        &self.cfg
+    }
+
+    /// [`process_channel`] with this layout and configuration.
+    ///
+    /// # Errors
+    /// As [`process_channel`].
+    pub fn process_channel(&self, velocity: &[f64], loopback: &[f64]) -> Result<ChannelResult, DspError> {
+        let (layout, cfg) = (&self.layout, &self.cfg);
+        check_signal("velocity", velocity)?;
+        check_signal("loopback", loopback)?;
+        if velocity.len() != loopback.len() {
+            return Err(DspError::LengthMismatch {
+                what: "velocity and loopback",
+                a: velocity.len(),
+                b: loopback.len(),
+            });
+        }
+        let n = layout.excitation.len();
+        let gains = self.template.bin_gains();
+        let positions = self.template.locate_in_checked(loopback, layout.repetitions)?;
+        if layout.repetitions == 1 {
+            return single_repetition(velocity, loopback, positions[0], n, cfg);
+        }
+        let clock = fit_clock(&positions, n)?;
+        let ratio = clock.ratio();
+        let guard = (clock.drift_ppm.abs() * 1e-6 * n as f64).ceil() as usize + GUARD_SAMPLES;
+        let tail_len = guard + cfg.ir_len;
+        if tail_len > n {
+            return Err(DspError::InvalidParameter {
+                name: "ir_len",
+                reason: format!("{} samples plus a guard of {guard} exceed the period of {n} samples", cfg.ir_len),
+            });
+        }
+        let out_len = layout.repetitions * n + tail_len;
+        let grid_start = clock.latency_samples - guard as f64 * ratio;
+        let grid_end = grid_start + (out_len - 1) as f64 * ratio;
+        if grid_end > (velocity.len() - 1) as f64 {
+            return Err(too_short(velocity.len(), grid_end));
+        }
+        let interpolator = self.interpolator;
+        let periods = Periods { repetitions: layout.repetitions, n, tail_len, grid_start, ratio };
+        let velocity_spectra = periods.spectra(interpolator, velocity)?;
+        let spectra: Vec<&[Complex64]> = velocity_spectra.chunks_exact(fft::bin_count(n)).collect();
+        let velocity_mean = average_spectra(&spectra, &periods.weights(), gains)?;
+        // The loopback is the played signal itself, so every steady-state period of it is the same. One period, the
+        // second, serves as the reference for all, which saves resampling the rest; its noise (a 16-bit DAQ
+        // channel's, some 80 dB below the signal) then enters the IR unaveraged, at that level.
+        let mut reference_period = vec![0.0; n];
+        interpolator.resample_into(loopback, periods.start(1), ratio, &mut reference_period)?;
+        let mut reference = vec![Complex64::new(0.0, 0.0); fft::bin_count(n)];
+        fft::forward_destructive(&mut reference_period, &mut reference)?;
+
+        let response = divide_spectra(&velocity_mean.mean, &reference, gains, cfg.regularisation)?;
+        let ir = to_recorder_clock(&fft::inverse(&response, n)?, ratio, cfg.ir_len, interpolator)?;
+
+        // Refine the latency on the resampled loopback, which no longer has a stretch: its offset from the
+        // excitation is where the first repetition starts within the first period.
+        let offset = self.template.delay_of(&reference)?;
+        let latency_samples = grid_start + offset.delay_samples * ratio;
+        check_latency(latency_samples)?;
+        Ok(ChannelResult { ir, snr_db: velocity_mean.snr_db(), drift_ppm: clock.drift_ppm, latency_samples })
+    }
 }
 
 /// The impulse response on the recorder's clock from one period of it on the player's clock (`period_ir`, `n`
@@ -183,33 +242,46 @@ fn to_recorder_clock(
     Ok(ir)
 }
 
-/// How the resampled recording splits into periods, and the weight of each in the average.
+/// How the recording splits into periods on the player's clock, and the weight of each in the average.
 struct Periods {
     repetitions: usize,
     n: usize,
     tail_len: usize,
-    /// Inverse relative noise energy: 1 for a steady-state period, `n / (n + tail_len)` for the first one, which
-    /// also carries the tail's noise.
-    weights: Vec<f64>,
+    /// Recorder position of the first period's first sample, and recorder samples per player sample.
+    grid_start: f64,
+    ratio: f64,
 }
 
 impl Periods {
-    fn new(repetitions: usize, n: usize, tail_len: usize) -> Self {
-        let mut weights = vec![1.0; repetitions];
-        weights[0] = n as f64 / (n + tail_len) as f64;
-        Self { repetitions, n, tail_len, weights }
+    /// Recorder position of period `k`'s first sample (`k == repetitions`: the tail's).
+    fn start(&self, k: usize) -> f64 {
+        self.grid_start + (k * self.n) as f64 * self.ratio
     }
 
-    /// Spectra of the first period plus the tail, then of each steady-state period; `u` holds
-    /// `repetitions * n + tail_len` samples.
-    fn spectra(&self, u: &[f64]) -> Result<Vec<Vec<Complex64>>, DspError> {
-        let n = self.n;
-        let mut first = u[..n].to_vec();
-        let tail = &u[self.repetitions * n..self.repetitions * n + self.tail_len];
-        first.iter_mut().zip(tail).for_each(|(f, t)| *f += t);
-        std::iter::once(fft::forward(&first, n))
-            .chain((1..self.repetitions).map(|k| fft::forward(&u[k * n..(k + 1) * n], n)))
-            .collect()
+    /// Inverse relative noise energy: 1 for a steady-state period, `n / (n + tail_len)` for the first one, which
+    /// also carries the tail's noise.
+    fn weights(&self) -> Vec<f64> {
+        let mut weights = vec![1.0; self.repetitions];
+        weights[0] = self.n as f64 / (self.n + self.tail_len) as f64;
+        weights
+    }
+
+    /// Spectra, back to back (`n / 2 + 1` bins each), of the first period plus the tail, then of each steady-state
+    /// period, resampled from `recording` one period at a time into a buffer that stays in cache.
+    fn spectra(&self, interpolator: &Interpolator, recording: &[f64]) -> Result<Vec<Complex64>, DspError> {
+        let (n, bins) = (self.n, fft::bin_count(self.n));
+        let mut tail = vec![0.0; self.tail_len];
+        interpolator.resample_into(recording, self.start(self.repetitions), self.ratio, &mut tail)?;
+        let mut period = vec![0.0; n];
+        let mut spectra = vec![Complex64::new(0.0, 0.0); self.repetitions * bins];
+        for (k, spectrum) in spectra.chunks_exact_mut(bins).enumerate() {
+            interpolator.resample_into(recording, self.start(k), self.ratio, &mut period)?;
+            if k == 0 {
+                period.iter_mut().zip(&tail).for_each(|(p, t)| *p += t);
+            }
+            fft::forward_destructive(&mut period, spectrum)?;
+        }
+        Ok(spectra)
     }
 }
 
@@ -283,6 +355,15 @@ mod tests {
             regularisation: 1e-3,
             pre_samples: 0,
         }
+    }
+
+    #[test]
+    fn a_two_sided_response_is_refused_with_repetitions_not_ignored() {
+        let two_sided = DeconvConfig { pre_samples: 64, ..cfg() };
+        let err = PreparedLayout::new(&layout(3), &two_sided).unwrap_err();
+        assert!(matches!(err, DspError::InvalidParameter { name: "pre_samples", .. }), "{err}");
+        // One repetition goes through reference deconvolution, which honours it.
+        assert!(PreparedLayout::new(&layout(1), &two_sided).is_ok());
     }
 
     /// Loopback: the copies from `latency` (whole samples, no drift), then `tail` samples of silence; velocity:
@@ -359,6 +440,30 @@ mod tests {
         // difference in how the skirts' ringing is truncated.
         let err = in_band_error(&out.ir, &[0.0, 0.0, 0.25], 4800);
         assert!(err < BIAS_BOUND, "in-band error {err:e}");
+    }
+
+    #[test]
+    fn a_prepared_layout_gives_what_process_channel_gives() {
+        // One preparation for several channels (latencies, responses, repetition counts): bit-identical results.
+        for repetitions in [1, 3] {
+            let l = layout(repetitions);
+            let prepared = PreparedLayout::new(&l, &cfg()).unwrap();
+            assert_eq!(prepared.layout(), &l);
+            assert_eq!(prepared.config(), &cfg());
+            for (latency, ir) in [(0, vec![0.0, 1.0]), (517, vec![0.5, 0.0, -0.25])] {
+                let (velocity, loopback) = acquisition(&l, latency, 700, &ir);
+                let out = prepared.process_channel(&velocity, &loopback).unwrap();
+                assert_eq!(out, process_channel(&velocity, &loopback, &l, &cfg()).unwrap());
+            }
+        }
+        // A bad layout or configuration is refused when preparing, a bad channel when processing.
+        let none = RepetitionLayout { repetitions: 0, ..layout(2) };
+        assert!(matches!(PreparedLayout::new(&none, &cfg()), Err(DspError::InvalidParameter { .. })));
+        let bad_cfg = DeconvConfig { regularisation: -1.0, ..cfg() };
+        assert!(matches!(PreparedLayout::new(&layout(2), &bad_cfg), Err(DspError::InvalidParameter { .. })));
+        let prepared = PreparedLayout::new(&layout(2), &cfg()).unwrap();
+        assert!(matches!(prepared.process_channel(&[1.0; 10], &[1.0; 9]), Err(DspError::LengthMismatch { .. })));
+        assert!(matches!(prepared.process_channel(&[], &[]), Err(DspError::Empty { .. })));
     }
 
     #[test]
