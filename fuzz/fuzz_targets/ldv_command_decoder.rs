@@ -1,12 +1,14 @@
 //! Device side of the LDV protocol: arbitrary host bytes, in arbitrary chunks, into `CommandDecoder`.
 //!
-//! Input layout: byte 0 gives the number of cuts (0 to 15), the next bytes give each cut's position as a fraction
-//! of the payload (byte / 256), the rest is the payload. Asserts: no panic; after draining, the decoder holds at
+//! Input layout: `common/chunks.rs`. Asserts: no panic; after draining, the decoder holds at
 //! most one line (`MAX_LINE_CONTENT` bytes); chunking does not change what is decoded; every command decoded
 //! re-encodes within `MAX_LINE_LEN` to bytes that decode back to the same command; every error becomes an `ERR`
 //! reply that encodes within `MAX_LINE_LEN` and decodes back to itself (what the mock controller would send).
 
 #![no_main]
+
+#[path = "common/chunks.rs"]
+mod chunks;
 
 use libfuzzer_sys::fuzz_target;
 use metaplate_ldv_protocol::{
@@ -14,22 +16,15 @@ use metaplate_ldv_protocol::{
 };
 
 fuzz_target!(|data: &[u8]| {
-    let Some((&head, rest)) = data.split_first() else { return };
-    let cut_count = usize::from(head % 16).min(rest.len());
-    let (cut_bytes, payload) = rest.split_at(cut_count);
-    let mut cuts: Vec<usize> = cut_bytes.iter().map(|&b| usize::from(b) * payload.len() / 256).collect();
-    cuts.push(payload.len());
-    cuts.sort_unstable();
-
-    let mut decoder = CommandDecoder::new();
-    let mut chunked = Vec::new();
-    let mut start = 0;
-    for cut in cuts {
-        decoder.push(&payload[start..cut]);
-        start = cut;
-        chunked.extend(decoder.drain());
-        assert!(decoder.buffered_len() <= MAX_LINE_CONTENT);
-    }
+    let Some((payload, cuts)) = chunks::split(data) else { return };
+    let chunked = chunks::feed(
+        &mut CommandDecoder::new(),
+        payload,
+        &cuts,
+        |d, bytes| d.push(bytes),
+        |d| d.drain().collect(),
+        |d| d.buffered_len() <= MAX_LINE_CONTENT,
+    );
 
     let mut whole = CommandDecoder::new();
     whole.push(payload);

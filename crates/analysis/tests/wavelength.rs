@@ -1,6 +1,6 @@
 //! Wavelength estimator on synthetic fields on the lab grid (49 x 25 at 5 mm, stadium mask), and at its extremes.
 //!
-//! Tolerances come from the bias table (`tests/wavelength_bias.rs`), whose cause is explained in the module
+//! Tolerances come from the bias table (`examples/wavelength_bias.rs`), whose cause is explained in the module
 //! documentation of `metaplate_analysis::wavelength`: for wavelengths up to `L / 2` (L = 24.5 cm) the half-maximum
 //! region is narrow next to |k| and the median is within about 3 % of the truth.
 #![allow(clippy::unwrap_used)] // tests may unwrap
@@ -66,7 +66,7 @@ fn cylindrical_wave_from_inside_the_aperture() {
 fn reverberant_standing_mixture() {
     // Speckle: 24 waves seen through an aperture a few wavelengths wide leave few independent k-samples on the ring,
     // and the peak lands where they happen to add up, so single fields scatter. Over 64 fields (command in
-    // `tests/wavelength_bias.rs`, `print_standing_mixture_scatter`) the bias has mean within 0.1 % and standard
+    // `examples/wavelength_bias.rs scatter`) the bias has mean within 0.1 % and standard
     // deviation 0.3 %, 1.0 %, 3.9 % at 2.5, 5, 10 cm. Here 16 other fields: their mean must lie within three standard
     // errors (3 sd / 4) of zero, and each single field within 5 sd (checked where the tail is Gaussian-like; at
     // 10 cm single fields reach 4 sd, so only the mean is checked there).

@@ -7,5 +7,7 @@
 pub mod clock;
 pub mod daq;
 pub mod grid;
+pub mod hash;
+pub mod rng;
 pub mod scene;
 pub mod vibrometer;

@@ -40,18 +40,7 @@ impl SpeckleModel {
     }
 }
 
-/// SplitMix64's output function: a well-mixed 64-bit hash of `z`.
-pub(crate) fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// Uniform in (0, 1) from 53 bits of `bits`: never exactly 0, so its logarithm is finite.
-pub(crate) fn unit(bits: u64) -> f64 {
-    ((bits >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-}
+pub(crate) use metaplate_core::rng::{mix64 as mix, unit_open as unit};
 
 #[cfg(test)]
 mod tests {

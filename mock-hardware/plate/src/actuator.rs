@@ -16,7 +16,7 @@ use metaplate_dsp::error::{check_result, check_sample_rate, check_signal};
 use num_complex::Complex64;
 
 use crate::error::PlateError;
-use crate::rng::SplitMix64;
+use metaplate_core::rng::SplitMix64;
 
 /// Stream constant separating coil-gain draws from the scene's other random draws.
 const COIL_STREAM: u64 = 0x636f_696c; // "coil"

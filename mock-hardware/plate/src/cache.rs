@@ -6,6 +6,7 @@
 //! the samples (f64). A file is written to a temporary name and renamed, so a reader never sees half a file; a file
 //! whose header does not match the request, is truncated, or holds a non-finite sample is ignored and recomputed.
 
+use metaplate_core::hash::fnv1a_64;
 use std::fs;
 use std::io::{ErrorKind, Write};
 use std::path::{Path, PathBuf};
@@ -21,11 +22,6 @@ const MAGIC: &[u8; 8] = b"MPGREEN1";
 /// Bumped whenever the model's numerics change, so stale caches are not reused.
 const MODEL_VERSION: u64 = 1;
 
-/// FNV-1a over bytes: stable across machines, runs and Rust versions.
-fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
-    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3))
-}
-
 /// Cache key of a request on a scene (by hash) with given options. The thread count is left out: results do not
 /// depend on it.
 pub fn cache_key(scene_hash: u64, options: &ModelOptions, request: &GreensRequest) -> u64 {
@@ -36,7 +32,7 @@ pub fn cache_key(scene_hash: u64, options: &ModelOptions, request: &GreensReques
         .chain(request.points.iter().map(|&p| p as u64))
         .chain([request.actuators.len() as u64])
         .chain(request.actuators.iter().map(|&a| a as u64));
-    fnv1a(words.flat_map(u64::to_le_bytes))
+    fnv1a_64(words.flat_map(u64::to_le_bytes))
 }
 
 /// Path of the cache file for a key.

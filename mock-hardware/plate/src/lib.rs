@@ -22,7 +22,6 @@ mod mesh;
 mod model;
 mod pattern;
 mod resonators;
-mod rng;
 
 pub use cache::{cache_key, cache_path, greens_functions};
 pub use error::PlateError;

@@ -25,7 +25,7 @@ use num_complex::Complex64;
 use crate::error::PlateError;
 use crate::mesh::Mesh;
 use crate::pattern::Pattern;
-use crate::rng::SplitMix64;
+use metaplate_core::rng::SplitMix64;
 
 /// Stream constant separating rod-height draws from the scene's other random draws.
 const HEIGHT_STREAM: u64 = 0x726f_6473; // "rods"

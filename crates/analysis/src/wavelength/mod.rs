@@ -21,7 +21,7 @@
 //!   cylindrical waves. A reverberant field (random standing waves) is unbiased on average up to 10 cm, but single
 //!   fields scatter (speckle: few independent k-samples): standard deviation 0.3, 1.0, 3.9, 8.4, 12 % at 2.5, 5,
 //!   10, 15, 25 cm, with mean bias -2 % at 15 cm and -18 % at 25 cm.
-//!   The table and the command that reproduces it are in `tests/wavelength_bias.rs`.
+//!   The table comes from `cargo run --release -p metaplate-analysis --example wavelength_bias`.
 //!
 //! Because of that bias, a second estimator that no aperture limits sits beside it: [`local`], the plate equation's
 //! biharmonic Rayleigh quotient ([`estimate_local_wavelength`]), exact in principle for any wavelength in a
@@ -56,7 +56,7 @@ pub enum KSpaceMethod {
     HalfMaxContour,
     /// Refinement: the angular average E(|k|) of |G(k)|^2, its peak, and all bins whose |k| lies in the half-maximum
     /// interval of E around that peak. Tried against the long-wavelength bias; on the test fields it is no better
-    /// than the contour (see `tests/wavelength_bias.rs`), so it is not the default.
+    /// than the contour (see `examples/wavelength_bias.rs`), so it is not the default.
     RadialProfile,
 }
 

@@ -174,9 +174,7 @@ impl Scene {
     /// A stable 64-bit hash of [`Scene::to_toml_string`] (FNV-1a): the same scene gives the same hash on every
     /// machine and run, so it can key caches and datasets.
     pub fn content_hash(&self) -> u64 {
-        const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
-        const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
-        self.to_toml_string().bytes().fold(FNV_OFFSET, |h, b| (h ^ u64::from(b)).wrapping_mul(FNV_PRIME))
+        crate::hash::fnv1a_64(self.to_toml_string().bytes())
     }
 
     /// Per grid point (by flat index): true when it can be measured, on the plate (edge included) and not on a

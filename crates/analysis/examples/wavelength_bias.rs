@@ -1,8 +1,10 @@
-//! Bias table of the wavelength estimator on synthetic fields:
-//! `cargo test -p metaplate-analysis --test wavelength_bias -- --ignored --nocapture --test-threads 1`
+//! Reports on the k-space wavelength estimator's bias on synthetic fields (measurements, not tests):
+//! `cargo run --release -p metaplate-analysis --example wavelength_bias -- [table|scatter]`
 //! (environment: `PAD=<zero_pad_factor>`, `MEAN=0` to keep the mean).
-#![allow(clippy::unwrap_used)] // tests may unwrap
+#![allow(clippy::unwrap_used)] // a report on fixed synthetic inputs: a failure is a bug to see at once
 
+// The synthetic fields of the integration tests, shared rather than copied (the module allows its own dead code).
+#[path = "../tests/common/mod.rs"]
 mod common;
 
 use common::*;
@@ -25,8 +27,6 @@ fn cases(lambda_m: f64) -> Vec<(&'static str, Vec<Complex64>)> {
     v
 }
 
-#[test]
-#[ignore = "prints the bias table; run explicitly"]
 fn print_bias_table() {
     let mask = stadium_mask();
     let pad: usize =
@@ -78,8 +78,6 @@ fn print_bias_table() {
     }
 }
 
-#[test]
-#[ignore = "prints the speckle statistics of reverberant fields; run explicitly"]
 fn print_standing_mixture_scatter() {
     let mask = stadium_mask();
     let opts = KSpaceOptions::default();
@@ -95,5 +93,15 @@ fn print_standing_mixture_scatter() {
         let sd = (biases.iter().map(|b| (b - mean) * (b - mean)).sum::<f64>() / (biases.len() - 1) as f64).sqrt();
         let worst = biases.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         println!("{:>5.1} cm: mean {mean:+.4}  sd {sd:.4}  worst |bias| {worst:.4}", l * 100.0);
+    }
+}
+
+/// `table` (default): the relative bias of the k-space estimator per synthetic case and wavelength (options from the
+/// environment: `PAD=n`, `MEAN=0`); `scatter`: the spread of the estimate over reverberant (standing-wave) fields.
+fn main() {
+    match std::env::args().nth(1).as_deref() {
+        None | Some("table") => print_bias_table(),
+        Some("scatter") => print_standing_mixture_scatter(),
+        Some(other) => eprintln!("unknown report `{other}`: use `table` or `scatter`"),
     }
 }
