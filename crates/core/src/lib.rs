@@ -1,9 +1,10 @@
 //! Shared domain types of metaplate.
 //!
-//! Measurement grids ([`grid`]) and scenes ([`scene`]: one TOML file describing a whole simulated lab); later, the
-//! capability traits (`Vibrometer`, `Daq`, `AudioOut`, `Clock`) as the driver layers arrive. It depends on nothing
+//! Measurement grids ([`grid`]) and scenes ([`scene`]: one TOML file describing a whole simulated lab); the
+//! capability traits recipes see (`Vibrometer`, `Daq`, `AudioOut`, `Clock`). It depends on nothing
 //! else in the workspace, and everything else may depend on it.
 
+pub mod audio;
 pub mod clock;
 pub mod daq;
 pub mod grid;
