@@ -3,8 +3,9 @@
 # .ci/run, so the two cannot drift apart. Idempotent: re-running it installs nothing new.
 set -euo pipefail
 
-# Debian packages (none needed yet: every crate we use builds without system libraries).
-debian_packages=()
+# Debian packages. The audio driver's ALSA backend (crate `alsa`, through `alsa-sys`) links libasound and finds it
+# with pkg-config; everything else builds without system libraries (serialport and hidapi without libudev).
+debian_packages=(libasound2-dev pkg-config)
 
 # Python packages used by tests that cross-check our output with independent tools (pinned).
 python_packages=()

@@ -9,6 +9,7 @@ pub mod clock;
 pub mod daq;
 pub mod grid;
 pub mod hash;
+pub mod rig;
 pub mod rng;
 pub mod scene;
 pub mod vibrometer;

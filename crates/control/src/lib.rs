@@ -1,0 +1,1 @@
+//! Wave-field control: propagation matrices, inverse filtering, time reversal, targets and drive-signal rendering.

@@ -1,0 +1,120 @@
+//! A rig: the instruments a recipe drives, behind their capability traits, and how they are wired together.
+//!
+//! Recipes receive a [`Rig`] and never know whether it is the real lab (drivers on serial, USB and ALSA) or the
+//! mock lab (the same drivers on in-process transports, on a virtual clock).
+
+use std::sync::Arc;
+
+use crate::audio::AudioOut;
+use crate::clock::Clock;
+use crate::daq::Daq;
+use crate::vibrometer::Vibrometer;
+
+/// How the instruments are cabled, and the rates they run at.
+///
+/// Valid range (checked by [`Wiring::validate`]): one audio channel per actuator, all distinct and different from
+/// the loopback channel; distinct DAQ inputs; finite positive rates and scales.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Wiring {
+    /// Audio output channel (from 0) that drives each actuator, indexed by actuator.
+    pub actuator_channels: Vec<u32>,
+    /// Audio output channel looped back into the DAQ as the timing reference.
+    pub loopback_channel: u32,
+    /// Output channels to open on the audio interface (at least every channel above + 1).
+    pub audio_channels: u32,
+    /// The audio interface's frame rate, Hz.
+    pub audio_sample_rate_hz: f64,
+    /// DAQ analog input that records the LDV's velocity output.
+    pub velocity_input: u8,
+    /// DAQ analog input that records the loopback channel.
+    pub loopback_input: u8,
+    /// DAQ input range for both inputs, +/- V.
+    pub daq_range_v: f64,
+    /// DAQ per-channel sample rate, Hz.
+    pub daq_sample_rate_hz: f64,
+    /// Volts at the DAQ's loopback input for a full-scale (1.0) audio sample, V.
+    pub loopback_volts_per_full_scale: f64,
+}
+
+impl Wiring {
+    /// Checks the wiring.
+    ///
+    /// # Errors
+    /// A sentence saying what is wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        let mut seen = std::collections::BTreeSet::new();
+        for (actuator, &channel) in self.actuator_channels.iter().enumerate() {
+            if channel == self.loopback_channel || !seen.insert(channel) {
+                return Err(format!("actuator {actuator}'s audio channel {channel} is used twice"));
+            }
+        }
+        let highest = self.actuator_channels.iter().copied().chain([self.loopback_channel]).max().unwrap_or(0);
+        if highest >= self.audio_channels {
+            return Err(format!("audio channel {highest} is beyond the {} opened channels", self.audio_channels));
+        }
+        if self.velocity_input == self.loopback_input {
+            return Err(format!("velocity and loopback share DAQ input {}", self.velocity_input));
+        }
+        for (name, value) in [
+            ("audio_sample_rate_hz", self.audio_sample_rate_hz),
+            ("daq_sample_rate_hz", self.daq_sample_rate_hz),
+            ("daq_range_v", self.daq_range_v),
+            ("loopback_volts_per_full_scale", self.loopback_volts_per_full_scale),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(format!("{name} = {value} must be finite and > 0"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The instruments of one lab, as capabilities, with their wiring and the clock they share.
+pub struct Rig {
+    /// The scanning vibrometer.
+    pub vibrometer: Box<dyn Vibrometer + Send>,
+    /// The DAQ recording velocity and loopback.
+    pub daq: Box<dyn Daq + Send>,
+    /// The audio interface driving the actuators.
+    pub audio: Box<dyn AudioOut + Send>,
+    /// The clock the recipe waits on (real, or the mock lab's virtual clock).
+    pub clock: Arc<dyn Clock>,
+    /// How it is cabled.
+    pub wiring: Wiring,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn wiring() -> Wiring {
+        Wiring {
+            actuator_channels: (0..8).collect(),
+            loopback_channel: 8,
+            audio_channels: 9,
+            audio_sample_rate_hz: 48_000.0,
+            velocity_input: 0,
+            loopback_input: 1,
+            daq_range_v: 10.0,
+            daq_sample_rate_hz: 24_000.0,
+            loopback_volts_per_full_scale: 1.0,
+        }
+    }
+
+    #[test]
+    fn wiring_checks_say_what_is_wrong() {
+        assert_eq!(wiring().validate(), Ok(()));
+        let mut w = wiring();
+        w.actuator_channels[3] = 8;
+        assert!(w.validate().unwrap_err().contains("actuator 3"));
+        let mut w = wiring();
+        w.audio_channels = 8;
+        assert!(w.validate().unwrap_err().contains("channel 8 is beyond"));
+        let mut w = wiring();
+        w.loopback_input = 0;
+        assert!(w.validate().unwrap_err().contains("share DAQ input 0"));
+        let mut w = wiring();
+        w.daq_sample_rate_hz = f64::NAN;
+        assert!(w.validate().unwrap_err().contains("daq_sample_rate_hz"));
+    }
+}

@@ -1,0 +1,1 @@
+//! HID response keypad driver (hidapi) for perceptual experiments.

@@ -1,0 +1,1 @@
+//! The mock audio interface: a PCM sink on the virtual clock with output latency, clock offset and underruns.

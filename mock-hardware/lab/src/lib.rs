@@ -1,0 +1,1 @@
+//! The mock lab: audio interface, actuators, plate, LDV and DAQ wired together on one virtual clock, from a scene.
