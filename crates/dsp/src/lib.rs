@@ -18,6 +18,7 @@ pub mod fft;
 pub mod impulse;
 pub mod kirkeby;
 pub mod pipeline;
+pub mod protocol;
 pub mod resample;
 pub mod sweep;
 pub mod window;
