@@ -1,0 +1,474 @@
+//! The ALSA backend: a [`PcmSink`] on a Linux sound card, through libasound (crate `alsa`).
+//!
+//! The stream is opened by PCM name (`hw:CARD=24Ao,DEV=0` for the interface itself, `default` for whatever the
+//! system routes to). It asks for the exact rate with ALSA's resampler off, the channel count, interleaved access,
+//! and the first sample format the device offers among `FLOAT_LE`, `S32_LE`, `S24_LE`, `S24_3LE`, `S16_LE`
+//! (converting from `f32` for the integer ones); it reports back what the device really opened, which the driver
+//! then compares with what it asked. One submitted buffer is written by a writer thread, which recovers from
+//! underruns (counting them) and drains the stream at the end.
+
+use std::ffi::CString;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::thread::JoinHandle;
+
+use alsa::pcm::{Access, Format, HwParams, PCM, State};
+use alsa::{Direction, ValueOr};
+
+use crate::sink::{PcmError, PcmParams, PcmSink, PcmStatus};
+
+/// Device buffer asked for, microseconds: long enough to ride over scheduling hiccups of a loaded 2-core machine,
+/// short enough that a stop takes effect quickly.
+const BUFFER_TIME_US: u32 = 200_000;
+/// Period asked for, microseconds (a quarter of the buffer: the writer refills in these steps).
+const PERIOD_TIME_US: u32 = 50_000;
+
+/// Longest single wait for room in the device buffer, ms (several buffer lengths).
+const WAIT_FOR_ROOM_MS: u32 = 1_000;
+
+/// A sample format the backend can write, in order of preference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SampleFormat {
+    /// 32-bit IEEE float, little-endian (`FLOAT_LE`): no conversion.
+    F32,
+    /// 32-bit signed integer, little-endian (`S32_LE`).
+    S32,
+    /// 24-bit signed integer in the low 3 bytes of a 32-bit little-endian word (`S24_LE`).
+    S24,
+    /// 24-bit signed integer packed in 3 bytes, little-endian (`S24_3LE`, common on USB interfaces).
+    S24Packed,
+    /// 16-bit signed integer, little-endian (`S16_LE`).
+    S16,
+}
+
+impl SampleFormat {
+    /// All formats, most preferred first.
+    pub const PREFERENCE: [SampleFormat; 5] =
+        [SampleFormat::F32, SampleFormat::S32, SampleFormat::S24, SampleFormat::S24Packed, SampleFormat::S16];
+
+    /// Bytes per sample of one channel.
+    pub fn bytes_per_sample(self) -> usize {
+        match self {
+            SampleFormat::F32 | SampleFormat::S32 | SampleFormat::S24 => 4,
+            SampleFormat::S24Packed => 3,
+            SampleFormat::S16 => 2,
+        }
+    }
+
+    fn alsa(self) -> Format {
+        match self {
+            SampleFormat::F32 => Format::FloatLE,
+            SampleFormat::S32 => Format::S32LE,
+            SampleFormat::S24 => Format::S24LE,
+            SampleFormat::S24Packed => Format::S243LE,
+            SampleFormat::S16 => Format::S16LE,
+        }
+    }
+}
+
+/// Converts full-scale `f32` samples (|x| <= 1) to the little-endian bytes of `format`.
+///
+/// Valid range: any `f32`; values beyond +/-1 are clipped to full scale, NaN becomes 0 (the driver has already
+/// refused non-finite buffers, so this only keeps the conversion total). Integer formats scale by the largest
+/// positive code (so +1 maps to `2^(bits-1) - 1` and -1 to one above the most negative code) and round to nearest.
+pub fn encode(samples: &[f32], format: SampleFormat) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(samples.len() * format.bytes_per_sample());
+    for &sample in samples {
+        let x = if sample.is_nan() { 0.0 } else { f64::from(sample).clamp(-1.0, 1.0) };
+        match format {
+            SampleFormat::F32 => bytes.extend_from_slice(&(x as f32).to_le_bytes()),
+            SampleFormat::S32 => bytes.extend_from_slice(&to_int(x, 31).to_le_bytes()),
+            SampleFormat::S24 => bytes.extend_from_slice(&to_int(x, 23).to_le_bytes()),
+            SampleFormat::S24Packed => bytes.extend_from_slice(&to_int(x, 23).to_le_bytes()[..3]),
+            SampleFormat::S16 => bytes.extend_from_slice(&to_int(x, 15).to_le_bytes()[..2]),
+        }
+    }
+    bytes
+}
+
+/// `x` in [-1, 1] scaled to a signed integer of `magnitude_bits + 1` bits, rounded to nearest.
+fn to_int(x: f64, magnitude_bits: i32) -> i32 {
+    let full_scale = ((1_i64 << magnitude_bits) - 1) as f64;
+    // |x| <= 1, so the product is within +/-full_scale and the cast cannot saturate.
+    (x * full_scale).round() as i32
+}
+
+/// What the device opened, kept for the writer.
+#[derive(Debug, Clone, Copy)]
+struct Negotiated {
+    format: SampleFormat,
+    channels: u32,
+    period_frames: usize,
+}
+
+/// What the writer thread hands back: the PCM (for the next buffer) and how the playback went.
+type WriterOutcome = (PCM, Result<PcmStatus, PcmError>);
+
+/// A playback stream on an ALSA PCM.
+pub struct AlsaSink {
+    name: String,
+    card: (String, String),
+    pcm: Option<PCM>,
+    negotiated: Option<Negotiated>,
+    writer: Option<JoinHandle<WriterOutcome>>,
+    stop: Arc<AtomicBool>,
+}
+
+impl AlsaSink {
+    /// A sink on the PCM called `pcm_name` (`hw:CARD=24Ao,DEV=0`, `default`, ...). Nothing is opened for playback
+    /// until [`PcmSink::open`]; the card's name is looked up now, best effort (empty when the PCM cannot be opened,
+    /// which `open` will then report).
+    pub fn new(pcm_name: &str) -> Self {
+        Self {
+            name: pcm_name.to_string(),
+            card: card_names(pcm_name),
+            pcm: None,
+            negotiated: None,
+            writer: None,
+            stop: Arc::new(AtomicBool::new(false)),
+        }
+    }
+
+    /// The PCM name this sink opens.
+    pub fn pcm_name(&self) -> &str {
+        &self.name
+    }
+
+    /// The sample format the open stream writes, if open.
+    pub fn sample_format(&self) -> Option<SampleFormat> {
+        self.negotiated.map(|n| n.format)
+    }
+
+    /// Joins the writer, if any, putting its PCM back.
+    fn join_writer(&mut self) -> Option<Result<PcmStatus, PcmError>> {
+        let handle = self.writer.take()?;
+        Some(match handle.join() {
+            Ok((pcm, result)) => {
+                self.pcm = Some(pcm);
+                result
+            }
+            Err(_) => {
+                // The PCM went down with the thread: only a reopen helps.
+                self.negotiated = None;
+                Err(PcmError::Other(format!("{}: the writer thread panicked", self.name)))
+            }
+        })
+    }
+}
+
+impl Drop for AlsaSink {
+    fn drop(&mut self) {
+        self.close();
+    }
+}
+
+/// (card name, card long name) of a PCM, or empty strings when it cannot be opened.
+fn card_names(pcm_name: &str) -> (String, String) {
+    let card = CString::new(pcm_name)
+        .ok()
+        .and_then(|name| PCM::open(&name, Direction::Playback, true).ok())
+        .and_then(|pcm| pcm.info().ok().map(|info| info.get_card()));
+    match card {
+        Some(index) if index >= 0 => {
+            let card = alsa::Card::new(index);
+            (card.get_name().unwrap_or_default(), card.get_longname().unwrap_or_default())
+        }
+        _ => (String::new(), String::new()),
+    }
+}
+
+/// Maps an ALSA error to a [`PcmError`], saying what was being done.
+fn map_error(pcm_name: &str, doing: &str, error: alsa::Error) -> PcmError {
+    let detail = format!("{pcm_name}: {doing}: {error}");
+    match error.errno() {
+        // Unplugged USB interfaces answer ENODEV (or ESHUTDOWN); a card that is gone has no PCM of that name.
+        libc::ENODEV | libc::ENOENT | libc::ENXIO | libc::ESHUTDOWN => PcmError::Disconnected(detail),
+        // The kernel gives up on a stream that stops progressing after about 10 s with EIO.
+        libc::EIO | libc::ETIMEDOUT => PcmError::Timeout(detail),
+        libc::EBUSY => PcmError::Unavailable(format!("{detail} (in use by another program?)")),
+        libc::EINVAL => PcmError::Params(detail),
+        libc::EBADFD => PcmError::State(detail),
+        _ => PcmError::Other(detail),
+    }
+}
+
+impl PcmSink for AlsaSink {
+    fn describe(&self) -> (String, String, String) {
+        (self.card.1.clone(), self.card.0.clone(), self.name.clone())
+    }
+
+    fn open(&mut self, wanted: PcmParams) -> Result<PcmParams, PcmError> {
+        self.close();
+        let rate_hz = wanted.sample_rate_hz;
+        // ALSA rates are whole numbers of frames per second.
+        if !(rate_hz.is_finite() && rate_hz >= 1.0 && rate_hz <= f64::from(u32::MAX) && rate_hz.fract() == 0.0) {
+            return Err(PcmError::Params(format!("{}: {rate_hz} Hz is not a whole rate ALSA can ask for", self.name)));
+        }
+        if wanted.channels == 0 {
+            return Err(PcmError::Params(format!("{}: 0 channels", self.name)));
+        }
+        let name = CString::new(self.name.as_str())
+            .map_err(|_| PcmError::Params(format!("PCM name {:?} contains a NUL byte", self.name)))?;
+        let err = |doing: &str| {
+            let pcm_name = self.name.clone();
+            let doing = doing.to_string();
+            move |e| map_error(&pcm_name, &doing, e)
+        };
+        let pcm = PCM::open(&name, Direction::Playback, false).map_err(err("opening for playback"))?;
+        let format = {
+            let hw = HwParams::any(&pcm).map_err(err("reading its parameters"))?;
+            // Refuse ALSA's own resampling: the device runs at the rate we ask, or we see that it does not.
+            hw.set_rate_resample(false).map_err(err("turning resampling off"))?;
+            hw.set_access(Access::RWInterleaved).map_err(err("asking for interleaved access"))?;
+            // Nearest values, not exact ones: the device then opens at what it can, we read it back, and the
+            // driver refuses a mismatch with both numbers in its message.
+            hw.set_channels_near(wanted.channels).map_err(err("setting the channel count"))?;
+            hw.set_rate_near(rate_hz as u32, ValueOr::Nearest).map_err(err("setting the rate"))?;
+            let format =
+                SampleFormat::PREFERENCE.into_iter().find(|f| hw.test_format(f.alsa()).is_ok()).ok_or_else(|| {
+                    PcmError::Params(format!("{}: offers none of FLOAT_LE, S32_LE, S24_LE, S24_3LE, S16_LE", self.name))
+                })?;
+            hw.set_format(format.alsa()).map_err(err("setting the sample format"))?;
+            hw.set_buffer_time_near(BUFFER_TIME_US, ValueOr::Nearest).map_err(err("setting the buffer time"))?;
+            hw.set_period_time_near(PERIOD_TIME_US, ValueOr::Nearest).map_err(err("setting the period time"))?;
+            pcm.hw_params(&hw).map_err(err("applying the parameters"))?;
+            format
+        };
+        let (opened, period_frames, buffer_frames) = {
+            let hw = pcm.hw_params_current().map_err(err("reading back its parameters"))?;
+            let rate = hw.get_rate().map_err(err("reading back the rate"))?;
+            let channels = hw.get_channels().map_err(err("reading back the channel count"))?;
+            let period = hw.get_period_size().map_err(err("reading back the period"))?;
+            let buffer = hw.get_buffer_size().map_err(err("reading back the buffer"))?;
+            (PcmParams { sample_rate_hz: f64::from(rate), channels }, period, buffer)
+        };
+        {
+            // Start only once the buffer is full (or explicitly, for a short buffer), not after the first period:
+            // a stream started early underruns while the writer is still filling it.
+            let sw = pcm.sw_params_current().map_err(err("reading the software parameters"))?;
+            sw.set_start_threshold(buffer_frames).map_err(err("setting the start threshold"))?;
+            pcm.sw_params(&sw).map_err(err("applying the software parameters"))?;
+        }
+        self.negotiated = Some(Negotiated {
+            format,
+            channels: opened.channels,
+            period_frames: usize::try_from(period_frames).unwrap_or(1).max(1),
+        });
+        self.pcm = Some(pcm);
+        Ok(opened)
+    }
+
+    fn submit(&mut self, interleaved: Vec<f32>) -> Result<(), PcmError> {
+        if self.writer.is_some() {
+            return Err(PcmError::State(format!("{}: submit while a buffer is still playing", self.name)));
+        }
+        let (Some(negotiated), Some(pcm)) = (self.negotiated, self.pcm.take()) else {
+            return Err(PcmError::State(format!("{}: submit before open", self.name)));
+        };
+        let channels = negotiated.channels as usize;
+        if interleaved.is_empty() || !interleaved.len().is_multiple_of(channels) {
+            self.pcm = Some(pcm);
+            return Err(PcmError::State(format!(
+                "{}: {} samples is not a whole, nonzero number of {channels}-channel frames",
+                self.name,
+                interleaved.len()
+            )));
+        }
+        let job = WriteJob {
+            bytes: encode(&interleaved, negotiated.format),
+            frame_bytes: channels * negotiated.format.bytes_per_sample(),
+            chunk_frames: negotiated.period_frames,
+            name: self.name.clone(),
+        };
+        self.stop.store(false, Ordering::Release);
+        let stop = Arc::clone(&self.stop);
+        let (started_tx, started_rx) = sync_channel(1);
+        let spawned = std::thread::Builder::new()
+            .name("alsa-writer".into())
+            .spawn(move || job.run(pcm, &stop, &started_tx))
+            .map_err(|e| {
+                // The PCM moved into the closure that never ran; a reopen makes a new one.
+                PcmError::Other(format!("{}: cannot start the writer thread: {e}", self.name))
+            });
+        match spawned {
+            Ok(handle) => self.writer = Some(handle),
+            Err(error) => {
+                self.negotiated = None;
+                return Err(error);
+            }
+        }
+        self.await_start(&started_rx)
+    }
+
+    fn wait(&mut self) -> Result<PcmStatus, PcmError> {
+        self.join_writer()
+            .unwrap_or_else(|| Err(PcmError::State(format!("{}: wait with nothing submitted", self.name))))
+    }
+
+    fn close(&mut self) {
+        self.stop.store(true, Ordering::Release);
+        // The writer sees the flag at its next period and drops the stream; its outcome no longer matters.
+        let _ = self.join_writer();
+        // Dropping the PCM closes it (snd_pcm_close).
+        self.pcm = None;
+        self.negotiated = None;
+    }
+}
+
+impl AlsaSink {
+    /// Waits until the writer says playback started (or failed before starting).
+    fn await_start(&mut self, started: &Receiver<Result<(), PcmError>>) -> Result<(), PcmError> {
+        match started.recv() {
+            Ok(Ok(())) => Ok(()),
+            // Failed before the stream ran: collect the thread so that the caller can retry or reopen.
+            Ok(Err(error)) => {
+                let _ = self.join_writer();
+                Err(error)
+            }
+            // The thread ended without a word: its outcome says why.
+            Err(_) => match self.join_writer() {
+                Some(Err(error)) => Err(error),
+                _ => Err(PcmError::Other(format!("{}: the writer ended before playback started", self.name))),
+            },
+        }
+    }
+}
+
+/// One buffer to write, as the device's bytes.
+struct WriteJob {
+    bytes: Vec<u8>,
+    frame_bytes: usize,
+    chunk_frames: usize,
+    name: String,
+}
+
+impl WriteJob {
+    /// The writer thread's body: plays the buffer, tells `started` when the stream runs (or why it failed),
+    /// and hands back the PCM with the outcome.
+    fn run(self, pcm: PCM, stop: &AtomicBool, started: &SyncSender<Result<(), PcmError>>) -> WriterOutcome {
+        let result = self.play(&pcm, stop, started);
+        if let Err(error) = &result {
+            // Ignored when the start was already reported (the receiver is gone): `wait` returns the error.
+            let _ = started.try_send(Err(error.clone()));
+        }
+        (pcm, result)
+    }
+
+    fn play(
+        &self,
+        pcm: &PCM,
+        stop: &AtomicBool,
+        started: &SyncSender<Result<(), PcmError>>,
+    ) -> Result<PcmStatus, PcmError> {
+        let err = |doing: &'static str| move |e| map_error(&self.name, doing, e);
+        if pcm.state() != State::Prepared {
+            pcm.prepare().map_err(err("preparing the stream"))?;
+        }
+        let total_frames = self.bytes.len() / self.frame_bytes;
+        let mut written = 0;
+        let mut underruns = 0_u32;
+        let mut signalled = false;
+        let signal = |signalled: &mut bool| {
+            if !*signalled {
+                *signalled = true;
+                let _ = started.try_send(Ok(()));
+            }
+        };
+        {
+            let io = pcm.io_bytes();
+            while written < total_frames {
+                if stop.load(Ordering::Acquire) {
+                    pcm.drop().map_err(err("stopping the stream"))?;
+                    return Ok(PcmStatus { frames_played: written as u64, underruns });
+                }
+                let end = (written + self.chunk_frames).min(total_frames);
+                match io.writei(&self.bytes[written * self.frame_bytes..end * self.frame_bytes]) {
+                    Ok(frames) => written += frames,
+                    // EPIPE: underrun; ESTRPIPE: suspended. Recover and carry on where we were.
+                    Err(e) if e.errno() == libc::EPIPE || e.errno() == libc::ESTRPIPE => {
+                        underruns = underruns.saturating_add(1);
+                        pcm.try_recover(e, true).map_err(err("recovering from an underrun"))?;
+                    }
+                    // Interrupted, or (unexpectedly, the stream blocks) not ready: wait for room, bounded, and retry.
+                    Err(e) if e.errno() == libc::EAGAIN || e.errno() == libc::EINTR => {
+                        pcm.wait(Some(WAIT_FOR_ROOM_MS)).map_err(err("waiting for room in the buffer"))?;
+                    }
+                    Err(e) => return Err(map_error(&self.name, "writing samples", e)),
+                }
+                if pcm.state() == State::Running {
+                    signal(&mut signalled);
+                }
+            }
+        }
+        // A buffer shorter than the device's never reached the start threshold.
+        if pcm.state() == State::Prepared {
+            pcm.start().map_err(err("starting the stream"))?;
+        }
+        signal(&mut signalled);
+        match pcm.drain() {
+            Ok(()) => {}
+            // An underrun while draining: the tail played late or not at all.
+            Err(e) if e.errno() == libc::EPIPE => underruns = underruns.saturating_add(1),
+            Err(e) => return Err(map_error(&self.name, "draining the stream", e)),
+        }
+        Ok(PcmStatus { frames_played: total_frames as u64, underruns })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn conversion_hits_full_scale_codes_exactly() {
+        // Exact: +/-1 and 0 are exactly representable and scale to integers.
+        let samples = [1.0_f32, -1.0, 0.0, 2.0, -2.0, f32::NAN];
+        let s16 = encode(&samples, SampleFormat::S16);
+        let codes: Vec<i16> = s16.chunks_exact(2).map(|b| i16::from_le_bytes([b[0], b[1]])).collect();
+        assert_eq!(codes, [32767, -32767, 0, 32767, -32767, 0]);
+        let s32 = encode(&samples, SampleFormat::S32);
+        let codes: Vec<i32> = s32.chunks_exact(4).map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+        assert_eq!(codes, [i32::MAX, -i32::MAX, 0, i32::MAX, -i32::MAX, 0]);
+        let s24 = encode(&samples[..2], SampleFormat::S24);
+        assert_eq!(s24, [0xff, 0xff, 0x7f, 0x00, 0x01, 0x00, 0x80, 0xff]);
+        let packed = encode(&samples[..2], SampleFormat::S24Packed);
+        assert_eq!(packed, [0xff, 0xff, 0x7f, 0x01, 0x00, 0x80]);
+        let float = encode(&[0.25, -3.0], SampleFormat::F32);
+        assert_eq!(float, [0.25_f32.to_le_bytes(), (-1.0_f32).to_le_bytes()].concat());
+    }
+
+    #[test]
+    fn conversion_rounds_to_nearest_code() {
+        // 0.5 / 32767 of full scale is half a code: rounds away from zero; a third of a code rounds to 0.
+        let half_code = (0.5 / 32767.0) as f32;
+        let third_code = (1.0 / 3.0 / 32767.0) as f32;
+        let s16 = encode(&[half_code * 1.001, third_code, -third_code], SampleFormat::S16);
+        assert_eq!(s16, [1, 0, 0, 0, 0, 0]);
+    }
+
+    #[test]
+    fn a_name_with_nul_is_a_typed_error() {
+        let mut sink = AlsaSink::new("hw:\0");
+        let err = sink.open(PcmParams { sample_rate_hz: 48_000.0, channels: 2 }).unwrap_err();
+        assert!(matches!(err, PcmError::Params(_)), "{err:?}");
+    }
+
+    #[test]
+    fn fractional_rates_are_refused_before_touching_alsa() {
+        let mut sink = AlsaSink::new("null");
+        for rate in [44_100.5, 0.0, -48_000.0, f64::NAN, f64::INFINITY, 1e10] {
+            let err = sink.open(PcmParams { sample_rate_hz: rate, channels: 2 }).unwrap_err();
+            assert!(matches!(err, PcmError::Params(_)), "{rate}: {err:?}");
+        }
+    }
+
+    #[test]
+    fn misuse_is_a_state_error() {
+        let mut sink = AlsaSink::new("null");
+        assert!(matches!(sink.submit(vec![0.0; 4]), Err(PcmError::State(_))));
+        assert!(matches!(sink.wait(), Err(PcmError::State(_))));
+        sink.close();
+        sink.close();
+    }
+}

@@ -1,0 +1,143 @@
+//! The real transport: a HID device through the `hidapi` crate.
+//!
+//! On Linux the crate is built with its pure-Rust hidraw backend (`linux-native-basic-udev`: devices are found in
+//! sysfs), so nothing but the Rust toolchain is needed to build it. Reading `/dev/hidraw*` needs permission: a udev
+//! rule such as `KERNEL=="hidraw*", ATTRS{idVendor}=="VVVV", ATTRS{idProduct}=="PPPP", MODE="0660", GROUP="plugdev"`.
+
+use ::hidapi::{DeviceInfo, HidApi, HidDevice, HidError};
+
+use crate::transport::{HidInput, TransportError};
+
+/// Usage page and usage of a keyboard collection (HID Usage Tables: Generic Desktop, Keyboard).
+const KEYBOARD_USAGE: (u16, u16) = (0x01, 0x06);
+/// Largest input report read at once, bytes (a boot report has 8; full-speed interrupt packets are at most 64).
+const MAX_REPORT_LEN: usize = 64;
+
+/// Which device to open.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HidapiSelector {
+    /// USB vendor ID.
+    pub vendor_id: u16,
+    /// USB product ID.
+    pub product_id: u16,
+    /// Serial number, when several identical pads are plugged in.
+    pub serial: Option<String>,
+}
+
+impl std::str::FromStr for HidapiSelector {
+    type Err = TransportError;
+
+    /// Parses `VID:PID` or `VID:PID:SERIAL`, ids in hexadecimal (as `lsusb` prints them).
+    fn from_str(text: &str) -> Result<Self, TransportError> {
+        let bad = || TransportError::Unavailable(format!("{text:?} is not VID:PID[:SERIAL] with hexadecimal ids"));
+        let mut parts = text.splitn(3, ':');
+        let mut id = || parts.next().and_then(|part| u16::from_str_radix(part, 16).ok()).ok_or_else(bad);
+        let (vendor_id, product_id) = (id()?, id()?);
+        let serial = parts.next().map(str::to_string);
+        Ok(Self { vendor_id, product_id, serial })
+    }
+}
+
+/// An open HID device.
+pub struct HidapiInput {
+    selector: HidapiSelector,
+    device: Option<HidDevice>,
+    names: (String, String, String),
+}
+
+impl HidapiInput {
+    /// Opens the device `selector` names. Among its HID interfaces, the keyboard collection (usage page 0x01,
+    /// usage 0x06) is preferred: a response pad often also has a consumer-control or vendor interface.
+    ///
+    /// # Errors
+    /// [`TransportError::Disconnected`] when no such device is plugged in; `Unavailable` when it cannot be opened
+    /// (permissions); `Io`.
+    pub fn open(selector: HidapiSelector) -> Result<Self, TransportError> {
+        let mut input = Self { selector, device: None, names: Default::default() };
+        input.connect()?;
+        Ok(input)
+    }
+
+    fn connect(&mut self) -> Result<(), TransportError> {
+        self.device = None;
+        let wanted = &self.selector;
+        let ids = format!("{:04x}:{:04x}", wanted.vendor_id, wanted.product_id);
+        let api = HidApi::new().map_err(|e| map_error(&format!("enumerating HID devices to find {ids}"), e))?;
+        let matches = |info: &&DeviceInfo| {
+            info.vendor_id() == wanted.vendor_id
+                && info.product_id() == wanted.product_id
+                && wanted.serial.as_deref().is_none_or(|serial| info.serial_number() == Some(serial))
+        };
+        let candidates: Vec<&DeviceInfo> = api.device_list().filter(matches).collect();
+        let info = candidates
+            .iter()
+            .find(|info| (info.usage_page(), info.usage()) == KEYBOARD_USAGE)
+            .or(candidates.first())
+            .ok_or_else(|| {
+                TransportError::Disconnected(format!(
+                    "no HID device {ids}{}",
+                    wanted.serial.as_deref().map(|s| format!(" with serial {s}")).unwrap_or_default()
+                ))
+            })?;
+        let device = info.open_device(&api).map_err(|e| map_error(&format!("opening {ids}"), e))?;
+        self.names = (
+            info.manufacturer_string().unwrap_or_default().to_string(),
+            info.product_string().unwrap_or_default().to_string(),
+            info.serial_number().unwrap_or_default().to_string(),
+        );
+        self.device = Some(device);
+        Ok(())
+    }
+}
+
+/// Maps a hidapi error to a [`TransportError`].
+fn map_error(doing: &str, error: HidError) -> TransportError {
+    let detail = format!("{doing}: {error}");
+    match &error {
+        HidError::IoError { error } => match error.raw_os_error() {
+            Some(libc::ENODEV | libc::ENOENT | libc::EIO | libc::ESHUTDOWN) => TransportError::Disconnected(detail),
+            Some(libc::EACCES | libc::EPERM) => {
+                TransportError::Unavailable(format!("{detail} (no permission on /dev/hidraw*: see the udev rule)"))
+            }
+            _ => TransportError::Io(detail),
+        },
+        // The hidraw backend reports a hang-up on the file as this message.
+        HidError::HidApiError { message } if message.contains("disconnected") || message.contains("not found") => {
+            TransportError::Disconnected(detail)
+        }
+        HidError::InitializationError => TransportError::Unavailable(detail),
+        _ => TransportError::Io(detail),
+    }
+}
+
+impl HidInput for HidapiInput {
+    fn describe(&self) -> (String, String, String) {
+        self.names.clone()
+    }
+
+    fn read_report(&mut self, timeout_s: f64) -> Result<Option<Vec<u8>>, TransportError> {
+        let device = self.device.as_ref().ok_or_else(|| TransportError::Disconnected("device closed".into()))?;
+        // Whole milliseconds, rounded up so that a short timeout still waits; capped at hidapi's i32.
+        let timeout_ms = if timeout_s.is_finite() && timeout_s > 0.0 {
+            (timeout_s * 1e3).ceil().min(f64::from(i32::MAX)) as i32
+        } else {
+            0
+        };
+        let mut buffer = [0_u8; MAX_REPORT_LEN];
+        match device.read_timeout(&mut buffer, timeout_ms) {
+            Ok(0) => Ok(None),
+            Ok(len) => Ok(Some(buffer[..len.min(MAX_REPORT_LEN)].to_vec())),
+            Err(error) => {
+                let error = map_error("reading a report", error);
+                if matches!(error, TransportError::Disconnected(_)) {
+                    self.device = None;
+                }
+                Err(error)
+            }
+        }
+    }
+
+    fn reopen(&mut self) -> Result<(), TransportError> {
+        self.connect()
+    }
+}
