@@ -1,1 +1,474 @@
 //! The mock lab: audio interface, actuators, plate, LDV and DAQ wired together on one virtual clock, from a scene.
+//!
+//! # Use
+//! ```no_run
+//! # use metaplate_lab::{MockLab, LabOptions};
+//! # use metaplate_core::scene::Scene;
+//! let scene = Scene::builtin("metamaterial")?;
+//! let lab = MockLab::new(&scene, &LabOptions::default())?; // computes (or loads) the Green's functions
+//! let rig = lab.rig()?; // the REAL drivers over mock transports, on the lab's virtual clock
+//! // ... hand `rig` to a recipe; keep `lab` alive while the rig is used ...
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//! [`MockLab::rig`] gives a [`Rig`]: `LdvDriver` (over an in-process line, or over a pseudo-terminal through the
+//! real `serialport` transport), `DaqDriver` (over the mock DAQ's bulk protocol) and `AudioDriver` (over
+//! [`MockPcm`]), all on one [`VirtualClock`], and the [`Wiring`]: actuator `i` on audio channel `i`, loopback on
+//! the channel after the last actuator (8 for the paper's 8 actuators), DAQ input 0 = LDV velocity, input 1 =
+//! loopback, rates from the scene.
+//!
+//! # Signal chain (per playback)
+//! 1. The audio interface ([`MockPcm`]) plays the buffer from `submit time + latency_s` at its true rate
+//!    `fs_a = 48 kHz * (1 + audio ppm)`; underrun faults insert silence into what is physically played.
+//! 2. Each active actuator channel (all-zero channels are skipped) goes through the amplifier (1 V at the coil per
+//!    full-scale sample, folded into the coil's force factor) and the actuator's voice coil
+//!    (`VoiceCoil::drive_to_force` at 48 kHz: cubic, gain spread, suspension high-pass, roll-off), giving force in N.
+//! 3. Force is convolved with the plate's Green's function from that actuator to the point under the beam (m/s
+//!    per N, [`metaplate_plate::greens_functions`], computed for the prepared points only, cached on disk).
+//! 4. The LDV turns velocity into its output voltage: noise `noise_rms_m_s / signal level` (the speckle level at
+//!    the spot, at least 0.05), dropouts (garbage across the range: random ones with the scene's
+//!    `dropout_probability` per playback, and the `ldv_dropout` windows; the next `SIG?` reads low), clipping at
+//!    the selected range's full scale, then volts = m/s / (range's m/s per V). The range and laser are read from
+//!    the mock controller, so the `VelocityScale` the driver reports converts the voltage back exactly; with the
+//!    laser off the output is 0 V. (The scene's `daq.volts_per_m_s` is the sensitivity of the range a recipe is
+//!    expected to pick; the lab uses the range actually selected.)
+//! 5. The DAQ samples input 0 (LDV output) and input 1 (loopback channel × `loopback_volts_per_full_scale`) at its
+//!    true rate `fs_d = 24 kHz * (1 + daq ppm)` from the moment it was started, digitised to 16 bits with
+//!    clipping by the mock DAQ, and streamed through its bulk protocol to the real driver.
+//!
+//! # Clocks
+//! Everything runs on one [`VirtualClock`] (true time). The DAQ's sample `n` is taken at `t0 + n / fs_d`, `t0`
+//! being the virtual time of its `Start` command; an audio frame `k` sounds at `start + k / fs_a`. Reading DAQ
+//! samples up to time `t` advances the clock to `t` (so causality holds: a later playback cannot reach samples
+//! already read); `AudioOut::finish` advances it to the end of the playback. So a 3 s sweep takes 3 s of virtual
+//! time, and no wall time beyond the computation. Mapping both rates to true time and resampling band-limited
+//! (dsp's Kaiser-sinc [`metaplate_dsp::resample::Interpolator`]) makes the loopback show the real latency and the
+//! ppm difference (for the built-in scenes 20 - (-30) = 50 ppm, DAQ fast of the interface).
+//!
+//! # How a playback is computed (performance)
+//! The work is done once per (playback, DAQ acquisition), when the DAQ first samples a time the playback covers:
+//! - per distinct drive buffer (hash of its samples; the same compensated sweep plays at every point), cached: the
+//!   force spectrum of each active actuator on a half-rate (24 kHz) grid of the audio clock, only the bins inside
+//!   the Green's functions' band; and the loopback decimated by 2 (an ideal low-pass at 12 kHz);
+//! - per playback: the Green's function spectrum at the beam's point (one FFT), the product with the force spectra, one inverse FFT on
+//!   the half-rate grid, and one interpolation of velocity and loopback onto the DAQ's sample times;
+//! - per DAQ sample: copying, noise (a cheap counter-based approximately normal draw), dropouts, range, clipping.
+//!
+//! # Faults (from the scene's `faults`, in virtual time, deterministic under the seed)
+//! | kind | device | what the recipe sees through the drivers |
+//! |---|---|---|
+//! | `serial_timeout` | LDV | no reply to lines answered in the window; in process every missed read costs its timeout in virtual time; `VibrometerError::Timeout` when the retries are spent |
+//! | `garbled_reply` / `partial_reply` | LDV | corrupted / truncated replies; the driver resynchronises, `Timeout` if all attempts fail |
+//! | `ldv_dropout` | LDV signal | velocity output is garbage in the window; `SIG?` answered in it reads 2 % |
+//! | `usb_stall` | DAQ | every read in the window times out (costing its timeout in virtual time): `DaqError::Timeout` once the driver's retries are spent |
+//! | `daq_overrun` | DAQ | once per window, the window's worth of packets (at least one) is lost at the source: the next block has `integrity.overrun` and `samples_missing` |
+//! | `audio_underrun` | audio | silence inserted into the physical playback (visible on the loopback), `PlaybackReport::underruns` |
+//! | `disconnect` | all three (a USB hub glitch) | each device, at its first use after the window's start, fails with `Disconnected` (the DAQ power-cycles, the LDV link drops, the audio stream closes); reopening fails with `Disconnected` until the window's end, then works |
+//!
+//! # Simplifications
+//! - The beam is read once per playback (at submit): moving it during a playback does not change that playback.
+//! - The Green's functions are sampled at the DAQ's nominal rate and applied on the audio clock's half-rate grid
+//!   (a frequency scaling of the plate by the audio clock's offset, 30 ppm: far below any modal bandwidth).
+//! - The loopback is ideally low-passed at 12 kHz (the real DAQ would alias content above; drive signals have none).
+//! - Noise is white at the DAQ rate, approximately normal (Irwin-Hall of 4 uniforms), level-scaled per spot.
+//! - The beam must rest on a prepared point (within half a grid step); elsewhere the plate gives no velocity
+//!   (counted in [`LabStats::beam_off_prepared_points`]). Actuator positions themselves are not yet preparable.
+//! - Over a pseudo-terminal, LDV timeouts cost wall time (the real port waits) and no virtual time, and a disconnect
+//!   is seen as a timeout (see `PtyServer`).
+
+mod chain;
+mod links;
+pub mod session;
+
+use std::f64::consts::PI;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use metaplate_audio::AudioDriver;
+use metaplate_core::clock::VirtualClock;
+use metaplate_core::rig::{Rig, Wiring};
+use metaplate_core::scene::Scene;
+use metaplate_daq::{DaqDriver, DriverSettings};
+use metaplate_ldv::{LdvDriver, RetryPolicy};
+use metaplate_mock_audio::{FaultWindows, MockPcm};
+use metaplate_mock_daq::{MockDaq, MockTransport, usb6211_info};
+use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, MockLine, PtyServer, SpeckleModel};
+use metaplate_plate::actuator::VoiceCoil;
+use metaplate_plate::{GreensFunctions, GreensRequest, ModelOptions, greens_functions};
+use num_complex::Complex64;
+
+pub use chain::LabStats;
+
+/// Why the lab could not be built or used.
+#[derive(Debug, thiserror::Error)]
+pub enum LabError {
+    /// An option is out of its valid range.
+    #[error("invalid lab option {name}: {reason}")]
+    InvalidOption {
+        /// Which option.
+        name: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The scene is invalid.
+    #[error(transparent)]
+    Scene(#[from] metaplate_core::scene::SceneError),
+    /// The plate model failed (Green's functions, voice coils).
+    #[error(transparent)]
+    Plate(#[from] metaplate_plate::PlateError),
+    /// Signal processing failed inside the chain.
+    #[error(transparent)]
+    Dsp(#[from] metaplate_dsp::error::DspError),
+    /// A point or actuator that was not prepared.
+    #[error("not prepared in this lab: {what}")]
+    NotPrepared {
+        /// What was asked for.
+        what: String,
+    },
+    /// The pseudo-terminal for the LDV could not be set up.
+    #[error(transparent)]
+    Pty(#[from] metaplate_mock_ldv::PtyError),
+    /// A driver failed to open on its mock device.
+    #[error("cannot open the {device} driver: {detail}")]
+    Driver {
+        /// Which device.
+        device: &'static str,
+        /// The driver's error.
+        detail: String,
+    },
+    /// [`MockLab::rig`] was called twice (the devices have one driver each).
+    #[error("the rig of this lab has already been taken")]
+    RigTaken,
+    /// A lock was poisoned by a panic elsewhere.
+    #[error("{0} lock was poisoned")]
+    Poisoned(&'static str),
+}
+
+/// How the LDV controller is served.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LdvLink {
+    /// An in-process `SerialLine` (no I/O; timeouts cost virtual time only). The default.
+    #[default]
+    InProcess,
+    /// A pseudo-terminal served by a thread, opened with the real `serialport` transport.
+    Pty,
+}
+
+/// What the lab prepares and how it serves the devices.
+///
+/// Valid range: `band_hz` with `0 < lo < hi <= daq.sample_rate_hz / 2`; `ir_duration_s > 0` (see
+/// [`GreensRequest`]); `loopback_volts_per_full_scale` finite and > 0; points on the plate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabOptions {
+    /// Replaces the scene's seed (noise, dropouts, speckle, coil spread, garbled bytes).
+    pub seed: Option<u64>,
+    /// Where Green's functions are cached (by scene hash and request); `None`: computed every time.
+    pub cache_dir: Option<PathBuf>,
+    /// Flat grid indices to prepare; `None`: the scene's measured points.
+    pub points: Option<Vec<usize>>,
+    /// Plate discretisation.
+    pub model: ModelOptions,
+    /// Band of the Green's functions, Hz (the plate passes nothing outside it).
+    pub band_hz: (f64, f64),
+    /// Length of the Green's functions, s.
+    pub ir_duration_s: f64,
+    /// How the LDV is served.
+    pub ldv_link: LdvLink,
+    /// Loopback voltage at the DAQ for a full-scale audio sample, V.
+    pub loopback_volts_per_full_scale: f64,
+}
+
+impl Default for LabOptions {
+    /// Scene seed, no cache, every measured point, default plate model, 40 to 800 Hz (the paper's sweeps and their
+    /// low harmonics), 0.5 s responses, in-process LDV, 1 V loopback per full scale.
+    fn default() -> Self {
+        Self {
+            seed: None,
+            cache_dir: None,
+            points: None,
+            model: ModelOptions::default(),
+            band_hz: (40.0, 800.0),
+            ir_duration_s: 0.5,
+            ldv_link: LdvLink::InProcess,
+            loopback_volts_per_full_scale: 1.0,
+        }
+    }
+}
+
+/// Constants a test needs to compare a measurement with the truth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LabConstants {
+    /// The audio interface's true frame rate, Hz.
+    pub audio_rate_true_hz: f64,
+    /// The DAQ's true sample rate, Hz.
+    pub daq_rate_true_hz: f64,
+    /// Output latency of the audio interface, s.
+    pub audio_latency_s: f64,
+    /// DAQ clock relative to the audio clock, ppm: `(fs_d / 24 kHz) / (fs_a / 48 kHz) - 1` (about 50 for the
+    /// built-in scenes).
+    pub drift_ppm: f64,
+    /// Loopback voltage per full-scale sample, V: multiply a velocity-per-loopback-volt response by it to get
+    /// velocity per full scale.
+    pub loopback_volts_per_full_scale: f64,
+    /// The Green's functions' band, Hz: outside it the plate passes nothing.
+    pub band_hz: (f64, f64),
+}
+
+/// The mock lab of one scene. Keep it alive while its [`Rig`] is in use (it owns the pseudo-terminal server).
+pub struct MockLab {
+    scene: Scene,
+    options: LabOptions,
+    clock: Arc<VirtualClock>,
+    ldv: Arc<Mutex<MockDevice>>,
+    shared: chain::Shared,
+    plate: Arc<chain::Plate>,
+    windows: FaultWindows,
+    wiring: Wiring,
+    rig_taken: Mutex<bool>,
+    pty: Mutex<Option<PtyServer>>,
+}
+
+impl std::fmt::Debug for MockLab {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MockLab")
+            .field("scene", &self.scene.name)
+            .field("options", &self.options)
+            .finish_non_exhaustive()
+    }
+}
+
+impl MockLab {
+    /// Builds the lab of `scene`: validates, computes (or loads from `options.cache_dir`) the Green's functions
+    /// of the prepared points from every actuator, and sets up the mock devices (nothing is served until
+    /// [`MockLab::rig`]).
+    ///
+    /// # Errors
+    /// [`LabError::Scene`], [`LabError::InvalidOption`], [`LabError::Plate`] (a point off the plate, a band the
+    /// model refuses, a cache that cannot be written).
+    pub fn new(scene: &Scene, options: &LabOptions) -> Result<MockLab, LabError> {
+        scene.validate()?;
+        let mut scene = scene.clone();
+        if let Some(seed) = options.seed {
+            scene.seed = seed;
+        }
+        let lv = options.loopback_volts_per_full_scale;
+        if !(lv.is_finite() && lv > 0.0) {
+            return Err(LabError::InvalidOption { name: "loopback_volts_per_full_scale", reason: format!("{lv}") });
+        }
+        let (_, hi) = options.band_hz;
+        let fs_g = scene.daq.sample_rate_hz;
+        if !(hi.is_finite() && hi > 0.0 && hi <= fs_g / 2.0) {
+            return Err(LabError::InvalidOption { name: "band_hz", reason: format!("top {hi} Hz at {fs_g} Hz") });
+        }
+        let points = options.points.clone().unwrap_or_else(|| scene.measured_points());
+        let request = GreensRequest {
+            points: points.clone(),
+            actuators: (0..scene.actuators.len()).collect(),
+            band_hz: options.band_hz,
+            duration_s: options.ir_duration_s,
+            sample_rate_hz: fs_g,
+        };
+        let greens = greens_functions(&scene, &options.model, &request, options.cache_dir.as_deref())?;
+        let coils = VoiceCoil::for_scene(&scene, scene.audio.sample_rate_hz)?;
+        let plate = Arc::new(chain::Plate {
+            positions_m: points.iter().map(|&p| scene.grid.position_m(p)).collect(),
+            tolerance_m: scene.grid.spacing_m / 2.0,
+            greens,
+            coils,
+        });
+        let clock = Arc::new(VirtualClock::new());
+        let windows = FaultWindows::new(&scene.faults);
+        let controller = MockController::new(&scene.ldv, scene.seed, "LAB-LDV-0001")
+            .map_err(|e| LabError::Driver { device: "LDV", detail: e.to_string() })?;
+        let ldv = Arc::new(Mutex::new(
+            MockDevice::new(controller, FaultSchedule::scripted(scene.seed, []))
+                .with_clock(Arc::clone(&clock))
+                .charging_read_timeouts()
+                .with_timed_faults(Box::new(links::LdvFaults::new(&windows))),
+        ));
+        let n_act = scene.actuators.len() as u32;
+        let wiring = Wiring {
+            actuator_channels: (0..n_act).collect(),
+            loopback_channel: n_act,
+            audio_channels: n_act + 1,
+            audio_sample_rate_hz: scene.audio.sample_rate_hz,
+            velocity_input: 0,
+            loopback_input: 1,
+            daq_range_v: scene.daq.range_v,
+            daq_sample_rate_hz: scene.daq.sample_rate_hz,
+            loopback_volts_per_full_scale: lv,
+        };
+        let params = chain::ChainParams {
+            seed: scene.seed,
+            actuator_channels: wiring.actuator_channels.clone(),
+            loopback_channel: wiring.loopback_channel,
+            velocity_input: wiring.velocity_input,
+            loopback_input: wiring.loopback_input,
+            loopback_volts_per_full_scale: lv,
+            daq_ppm: scene.daq.clock_offset_ppm,
+            noise_rms_m_s: scene.ldv.noise_rms_m_s,
+            dropout_probability: scene.ldv.dropout_probability,
+            band_hi_hz: hi,
+        };
+        let state = chain::LabState::new(
+            params,
+            Arc::clone(&plate),
+            Arc::clone(&clock),
+            Arc::clone(&ldv),
+            SpeckleModel::new(&scene.ldv, scene.seed),
+            windows.clone(),
+        );
+        let shared = chain::Shared(Arc::new(Mutex::new(state)));
+        Ok(MockLab {
+            scene,
+            options: options.clone(),
+            clock,
+            ldv,
+            shared,
+            plate,
+            windows,
+            wiring,
+            rig_taken: Mutex::new(false),
+            pty: Mutex::new(None),
+        })
+    }
+
+    /// The real drivers over the mock devices, on the lab's clock, with the wiring. Once per lab.
+    ///
+    /// # Errors
+    /// [`LabError::RigTaken`] on a second call; [`LabError::Pty`] or [`LabError::Driver`] when a link cannot be
+    /// opened (for example the DAQ driver's handshake, if a fault window covers time 0).
+    pub fn rig(&self) -> Result<Rig, LabError> {
+        {
+            let mut taken = self.rig_taken.lock().map_err(|_| LabError::Poisoned("the rig flag"))?;
+            if *taken {
+                return Err(LabError::RigTaken);
+            }
+            *taken = true;
+        }
+        let clock: Arc<dyn metaplate_core::clock::Clock> = self.clock.clone();
+        let ldv_error =
+            |e: metaplate_core::vibrometer::VibrometerError| LabError::Driver { device: "LDV", detail: e.to_string() };
+        let vibrometer: Box<dyn metaplate_core::vibrometer::Vibrometer + Send> = match self.options.ldv_link {
+            LdvLink::InProcess => Box::new(
+                LdvDriver::new(MockLine::new(Arc::clone(&self.ldv)), Arc::clone(&clock), RetryPolicy::default())
+                    .map_err(ldv_error)?,
+            ),
+            LdvLink::Pty => {
+                let server = PtyServer::spawn(Arc::clone(&self.ldv))?;
+                let selector = metaplate_ldv::PortSelector::Path(server.path().to_path_buf());
+                let line = metaplate_ldv::SerialPortLine::open(selector)
+                    .map_err(|e| LabError::Driver { device: "LDV", detail: e.to_string() })?;
+                *self.pty.lock().map_err(|_| LabError::Poisoned("the pty slot"))? = Some(server);
+                Box::new(LdvDriver::new(line, Arc::clone(&clock), RetryPolicy::default()).map_err(ldv_error)?)
+            }
+        };
+        let source = Box::new(chain::LabSource(self.shared.clone()));
+        let device = MockDaq::new(usb6211_info("LAB-DAQ-0001"), source)
+            .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
+        let transport = MockTransport::new(device, metaplate_mock_daq::FaultSchedule::none());
+        let link = links::LabDaqLink::new(transport, Arc::clone(&self.clock), &self.windows, self.shared.clone());
+        let daq = DaqDriver::open(link, DriverSettings::default())
+            .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
+        let pcm = MockPcm::new(&self.scene.audio, Arc::clone(&self.clock), &self.scene.faults)
+            .with_observer(Arc::new(self.shared.clone()));
+        Ok(Rig {
+            vibrometer,
+            daq: Box::new(daq),
+            audio: Box::new(AudioDriver::new(pcm)),
+            clock,
+            wiring: self.wiring.clone(),
+        })
+    }
+
+    /// The scene in force (with the seed override applied).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The lab's virtual clock (the rig's clock).
+    pub fn clock(&self) -> &Arc<VirtualClock> {
+        &self.clock
+    }
+
+    /// The wiring the rig reports.
+    pub fn wiring(&self) -> &Wiring {
+        &self.wiring
+    }
+
+    /// The mock LDV device (to inspect the controller, or latch a fault by hand in a test).
+    pub fn ldv_device(&self) -> &Arc<Mutex<MockDevice>> {
+        &self.ldv
+    }
+
+    /// The Green's functions the lab uses (prepared points × every actuator, m/s per N at the DAQ's nominal rate).
+    pub fn greens(&self) -> &GreensFunctions {
+        &self.plate.greens
+    }
+
+    /// Counters of the signal chain.
+    ///
+    /// # Errors
+    /// [`LabError::Poisoned`] if a panic poisoned the lab's state.
+    pub fn stats(&self) -> Result<LabStats, LabError> {
+        Ok(self.shared.lock()?.stats)
+    }
+
+    /// Constants for comparing measurements with [`MockLab::true_response`].
+    pub fn constants(&self) -> LabConstants {
+        let a = 1.0 + self.scene.audio.clock_offset_ppm * 1e-6;
+        let d = 1.0 + self.scene.daq.clock_offset_ppm * 1e-6;
+        LabConstants {
+            audio_rate_true_hz: self.scene.audio.sample_rate_hz * a,
+            daq_rate_true_hz: self.scene.daq.sample_rate_hz * d,
+            audio_latency_s: self.scene.audio.latency_s,
+            drift_ppm: (d / a - 1.0) * 1e6,
+            loopback_volts_per_full_scale: self.options.loopback_volts_per_full_scale,
+            band_hz: self.options.band_hz,
+        }
+    }
+
+    /// The linear part of the chain from a full-scale sample on `actuator`'s audio channel to plate velocity at
+    /// grid point `point` (flat grid index, one of the prepared points), at each of `freqs_hz`: voice coil's linear
+    /// response (N per full scale) times the Green's function (m/s per N) as the lab applies it. m/s per full
+    /// scale. The cubic nonlinearity, noise and the LDV's range are not included.
+    ///
+    /// Valid range: `0 <= f <= daq.sample_rate_hz / 2` (zero outside the band by construction).
+    ///
+    /// # Errors
+    /// [`LabError::NotPrepared`] for a point or actuator the lab did not prepare; [`LabError::InvalidOption`] for a
+    /// frequency out of range.
+    pub fn true_response(&self, point: usize, actuator: usize, freqs_hz: &[f64]) -> Result<Vec<Complex64>, LabError> {
+        let greens = &self.plate.greens;
+        let point_k = greens
+            .points
+            .iter()
+            .position(|&p| p == point)
+            .ok_or(LabError::NotPrepared { what: format!("grid point {point}") })?;
+        let ir = greens.ir(point_k, actuator).ok_or(LabError::NotPrepared { what: format!("actuator {actuator}") })?;
+        let coil = self.plate.coils.get(actuator).ok_or(LabError::NotPrepared { what: format!("coil {actuator}") })?;
+        let nyquist = greens.sample_rate_hz / 2.0;
+        freqs_hz
+            .iter()
+            .map(|&f| {
+                if !(0.0..=nyquist).contains(&f) {
+                    return Err(LabError::InvalidOption {
+                        name: "freqs_hz",
+                        reason: format!("{f} Hz outside 0..={nyquist}"),
+                    });
+                }
+                // The response's DTFT, by a rotating phasor (re-normalised now and then against rounding drift).
+                let step = Complex64::from_polar(1.0, -2.0 * PI * f / greens.sample_rate_hz);
+                let mut phasor = Complex64::new(1.0, 0.0);
+                let mut sum = Complex64::new(0.0, 0.0);
+                for (n, &h) in ir.iter().enumerate() {
+                    sum += phasor * h;
+                    phasor *= step;
+                    if n % 1024 == 1023 {
+                        phasor /= phasor.norm();
+                    }
+                }
+                Ok(sum * coil.frequency_response(f))
+            })
+            .collect()
+    }
+}

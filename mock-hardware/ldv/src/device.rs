@@ -7,7 +7,7 @@ use metaplate_core::clock::VirtualClock;
 use metaplate_ldv_protocol::{Command, CommandDecoder, LaserState, Reply, encode_reply};
 
 use crate::controller::MockController;
-use crate::faults::{Fault, FaultSchedule};
+use crate::faults::{Fault, FaultSchedule, TimedFaults};
 
 /// The mock controller with its link: decodes host bytes, answers each line (with the scheduled faults), queues
 /// the reply bytes, and records what the host sent.
@@ -22,6 +22,8 @@ pub struct MockDevice {
     link_up: bool,
     host_log: Vec<u8>,
     clock: Option<Arc<VirtualClock>>,
+    timed: Option<Box<dyn TimedFaults>>,
+    charge_read_timeouts: bool,
 }
 
 impl MockDevice {
@@ -37,7 +39,36 @@ impl MockDevice {
             link_up: true,
             host_log: Vec::new(),
             clock: None,
+            timed: None,
+            charge_read_timeouts: false,
         }
+    }
+
+    /// Adds faults keyed by simulated time (read from the clock given by [`MockDevice::with_clock`]; without a
+    /// clock they are looked up at 0 s). A line-keyed fault of the [`FaultSchedule`] takes precedence.
+    pub fn with_timed_faults(mut self, timed: Box<dyn TimedFaults>) -> Self {
+        self.timed = Some(timed);
+        self
+    }
+
+    /// Makes a read that finds no reply cost its timeout in simulated time ([`MockDevice::charge_timeout`]), as
+    /// a real port's read would, so that a time-keyed fault window ends while a driver retries.
+    pub fn charging_read_timeouts(mut self) -> Self {
+        self.charge_read_timeouts = true;
+        self
+    }
+
+    /// Advances the clock by `timeout_s` if [`MockDevice::charging_read_timeouts`] was set (a read that found
+    /// nothing waited that long). Negative or non-finite timeouts advance nothing.
+    pub fn charge_timeout(&mut self, timeout_s: f64) {
+        if let (true, Some(clock)) = (self.charge_read_timeouts, &self.clock) {
+            clock.advance(timeout_s);
+        }
+    }
+
+    fn now_s(&self) -> f64 {
+        use metaplate_core::clock::Clock;
+        self.clock.as_ref().map_or(0.0, |c| c.now_s())
     }
 
     /// Advances `clock` by each command's specified response time (section 6 of the protocol), so that a session
@@ -72,8 +103,13 @@ impl MockDevice {
         self.link_up
     }
 
-    /// Brings the link back up (the host reopened the port); bytes in flight are lost.
+    /// Brings the link back up (the host reopened the port); bytes in flight are lost. With time-keyed faults, the
+    /// link stays down while the device is still absent ([`TimedFaults::may_reconnect`]).
     pub fn reconnect(&mut self) {
+        let now_s = self.now_s();
+        if self.timed.as_mut().is_some_and(|t| !t.may_reconnect(now_s)) {
+            return;
+        }
         if !self.link_up {
             self.link_up = true;
             self.decoder.clear();
@@ -114,7 +150,16 @@ impl MockDevice {
         if let (Some(clock), Ok(command)) = (&self.clock, &line) {
             clock.advance(response_time_s(command));
         }
-        let fault = self.faults.fault_at(index);
+        let now_s = self.now_s();
+        let timed = match self.timed.as_mut().and_then(|t| t.fault_at_time(now_s)) {
+            Some(Fault::Dropout { queries }) => {
+                // A dropout in progress: this line's own signal query already reads low.
+                self.controller.start_dropout(queries);
+                None
+            }
+            other => other,
+        };
+        let fault = self.faults.fault_at(index).or(timed);
         let reply = match fault {
             Some(Fault::Busy) => encode_reply(&busy()),
             Some(Fault::Disconnect { power_cycle }) => {

@@ -32,6 +32,18 @@ pub enum Fault {
     },
 }
 
+/// Faults keyed by simulated time rather than by line index (the mock lab's scene schedule): consulted for every
+/// line the device answers, with the device's virtual clock reading.
+pub trait TimedFaults: Send + std::fmt::Debug {
+    /// The fault for a line answered at `now_s` (simulated time, s), if any. [`Fault::Dropout`] here makes the
+    /// line's own `SIG?` (and the next `queries - 1`) read low.
+    fn fault_at_time(&mut self, now_s: f64) -> Option<Fault>;
+
+    /// Whether a dropped link may come back at `now_s` (false while the device is still absent); a true answer
+    /// means the link is back, so the implementation may forget the disconnect.
+    fn may_reconnect(&mut self, now_s: f64) -> bool;
+}
+
 /// Faults by received-line index, and the seed that places garbled bytes and partial cuts.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FaultSchedule {

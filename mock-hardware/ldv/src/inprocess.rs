@@ -42,13 +42,14 @@ impl SerialLine for MockLine {
         Ok(())
     }
 
-    fn read(&mut self, buf: &mut [u8], _timeout_s: f64) -> Result<usize, LineError> {
+    fn read(&mut self, buf: &mut [u8], timeout_s: f64) -> Result<usize, LineError> {
         let mut device = self.device()?;
         if !device.is_connected() {
             return Err(down());
         }
         let mut output = device.take_output();
         if output.is_empty() {
+            device.charge_timeout(timeout_s);
             return Err(LineError::Timeout);
         }
         let n = output.len().min(buf.len());
@@ -62,7 +63,9 @@ impl SerialLine for MockLine {
     }
 
     fn reopen(&mut self) -> Result<(), LineError> {
-        self.device()?.reconnect();
-        Ok(())
+        let mut device = self.device()?;
+        device.reconnect();
+        // A device that is still absent (a time-keyed disconnect) cannot be reopened yet.
+        if device.is_connected() { Ok(()) } else { Err(down()) }
     }
 }

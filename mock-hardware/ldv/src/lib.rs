@@ -20,7 +20,7 @@ mod speckle;
 
 pub use controller::{MockController, STANDOFF_M};
 pub use device::MockDevice;
-pub use faults::{Fault, FaultSchedule};
+pub use faults::{Fault, FaultSchedule, TimedFaults};
 pub use inprocess::MockLine;
 pub use pty::{PtyError, PtyServer};
 pub use speckle::{DROPOUT_LEVEL_PERCENT, SpeckleModel};
