@@ -54,7 +54,8 @@ const FADE_OUT_S: f64 = 0.010;
 /// <=` [`MAX_IR_SAMPLES`]; finite positive `sample_rate_hz`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GreensRequest {
-    /// Flat grid indices of the points, in the order wanted.
+    /// Flat grid indices of the points, in the order wanted. Index `grid.len() + k` (past the grid) is actuator
+    /// k's own position, its driving point, where the calibration recipe aims the beam (on the magnet).
     pub points: Vec<usize>,
     /// Actuator indices, in the order wanted.
     pub actuators: Vec<usize>,

@@ -61,7 +61,9 @@ pub struct PlateModel {
     host_loss_factor: f64,
     actuators: Vec<Vec<(usize, f64)>>,
     /// Interpolation weights of each grid point (by flat index), or its position (m) when it is off the plate.
+    /// Indices `0..grid_len` are the grid's points; `grid_len + k` is actuator k's driving point.
     points: Vec<Result<Weights, (f64, f64)>>,
+    grid_len: usize,
     symbolic: SymbolicLu<usize>,
     scene_hash: u64,
     options: ModelOptions,
@@ -150,7 +152,8 @@ impl PlateModel {
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let points = (0..scene.grid.len())
+        let grid_len = scene.grid.len();
+        let mut points: Vec<Result<Weights, (f64, f64)>> = (0..grid_len)
             .map(|i| {
                 let (x, y) = scene.grid.position_m(i);
                 outline
@@ -160,6 +163,9 @@ impl PlateModel {
                     .ok_or((x, y))
             })
             .collect();
+        // Driving points: index `grid_len + k` is actuator k's own position, where the calibration recipe puts the
+        // beam (on the magnet), which is generally not a grid point.
+        points.extend(actuators.iter().map(|w| Ok(w.clone())));
         let symbolic = factorize_symbolic_lu(symbolic_ref(&pattern), Default::default())
             .map_err(|e| PlateError::Solve { freq_hz: 0.0, reason: format!("symbolic analysis: {e:?}") })?;
         Ok(Self {
@@ -173,6 +179,7 @@ impl PlateModel {
             host_loss_factor,
             actuators,
             points,
+            grid_len,
             symbolic,
             scene_hash: scene.content_hash(),
             options: *options,
@@ -194,9 +201,10 @@ impl PlateModel {
         self.actuators.len()
     }
 
-    /// Number of grid points (all of them, on the plate or not).
+    /// Number of grid points (all of them, on the plate or not). Point indices from `grid_len()` on address the
+    /// actuators' driving points (see [`crate::GreensRequest::points`]).
     pub fn grid_len(&self) -> usize {
-        self.points.len()
+        self.grid_len
     }
 
     /// The smallest loss factor in the model (plate, pads, rods).
@@ -234,7 +242,7 @@ impl PlateModel {
         self.scene_hash
     }
 
-    /// Plate normal velocity at grid `points` (flat grid indices) per unit force at `actuators` (indices into the
+    /// Plate normal velocity at grid `points` (flat grid indices, or `grid_len() + k` for actuator k's driving point) per unit force at `actuators` (indices into the
     /// scene's actuators), m/s/N, at `freq_hz`: `points.len() * actuators.len()` values, point-major
     /// (`[p * actuators.len() + a]`). One sparse LU and one solve per call: to sweep many frequencies use
     /// [`crate::greens_functions`], which shares the work across threads.

@@ -82,3 +82,29 @@ fn converges_under_grid_refinement() {
     let (d12, d23) = (diff(&responses[0], &responses[1]), diff(&responses[1], &responses[2]));
     assert!(d23 < d12, "not converging: |r2 - r1| = {d12}, |r3 - r2| = {d23}");
 }
+
+#[test]
+fn driving_points_follow_the_grid() {
+    // Actuator 0 on a grid point: its driving point (index grid.len() + 0) must give exactly what the grid point
+    // gives (same interpolation weights: one node). Actuator 1 off the grid: its driving point is reciprocal with
+    // actuator 0's (complex symmetric system, same weights for load and observation).
+    let mut scene = Scene::builtin("metamaterial").unwrap();
+    (scene.actuators[0].x_m, scene.actuators[0].y_m) = (0.05, 0.02);
+    scene.validate().unwrap();
+    let g = &scene.grid;
+    let on_grid = g.index(
+        ((0.05 - g.origin_x_m) / g.spacing_m).round() as usize,
+        ((0.02 - g.origin_y_m) / g.spacing_m).round() as usize,
+    );
+    let model = PlateModel::from_scene(&scene, &ModelOptions::default()).unwrap();
+    let (drive0, drive1) = (g.len(), g.len() + 1);
+    assert_eq!(model.grid_len(), g.len());
+    for f in [80.0, 610.0] {
+        let r = model.frequency_response(f, &[0, 1], &[on_grid, drive0, drive1]).unwrap();
+        assert_eq!(r[0], r[2], "{f} Hz: grid point vs driving point of actuator 0");
+        // 1e-8 relative: as in the reciprocity test above.
+        assert!((r[3] - r[4]).norm() < 1e-8 * r[3].norm(), "{f} Hz: {} vs {}", r[3], r[4]);
+    }
+    let beyond = g.len() + scene.actuators.len();
+    assert!(model.frequency_response(100.0, &[0], &[beyond]).is_err());
+}
