@@ -8,7 +8,7 @@ set -euo pipefail
 debian_packages=(libasound2-dev pkg-config)
 
 # Python packages used by tests that cross-check our output with independent tools (pinned).
-python_packages=()
+python_packages=(polars==2.1.0 pyarrow==26.0.1)
 
 if [ ${#debian_packages[@]} -gt 0 ]; then
     missing=()

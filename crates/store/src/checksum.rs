@@ -55,6 +55,11 @@ impl<W: Write> HashingWriter<W> {
         Self { inner, hasher: Sha256::new(), bytes: 0 }
     }
 
+    /// The inner writer.
+    pub(crate) fn get_ref(&self) -> &W {
+        &self.inner
+    }
+
     /// The inner writer, the checksum of everything written, and its length in bytes.
     pub(crate) fn finish(self) -> (W, String, u64) {
         (self.inner, format_digest(self.hasher), self.bytes)

@@ -72,10 +72,27 @@ fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::Ar
 /// # Errors
 /// [`StoreError::Arrow`] or [`StoreError::Parquet`] (including I/O errors of `sink`, which Parquet wraps).
 pub(crate) fn write_parquet(sink: impl Write + Send, records: &[IrRecord], file: &str) -> Result<(), StoreError> {
+    write_parquet_parts(sink, std::iter::once(Ok(records)), file)
+}
+
+/// Writes the records of `parts` as one Parquet file, one row group per part, so that a large file (a compaction)
+/// never holds more than one part in memory; `file` names it in errors.
+///
+/// # Errors
+/// The first error of `parts`, or as [`write_parquet`].
+pub(crate) fn write_parquet_parts<P: AsRef<[IrRecord]>>(
+    sink: impl Write + Send,
+    parts: impl IntoIterator<Item = Result<P, StoreError>>,
+    file: &str,
+) -> Result<(), StoreError> {
     let parquet = |source| StoreError::Parquet { file: file.to_string(), source };
-    let batch = to_record_batch(records).map_err(|source| StoreError::Arrow { file: file.to_string(), source })?;
     let mut writer = ArrowWriter::try_new(sink, arrow_schema(), Some(writer_properties())).map_err(parquet)?;
-    writer.write(&batch).map_err(parquet)?;
+    for part in parts {
+        let batch =
+            to_record_batch(part?.as_ref()).map_err(|source| StoreError::Arrow { file: file.to_string(), source })?;
+        writer.write(&batch).map_err(parquet)?;
+        writer.flush().map_err(parquet)?;
+    }
     writer.close().map_err(parquet)?;
     Ok(())
 }

@@ -74,8 +74,8 @@ pub enum StoreError {
         /// The dataset directory.
         dir: PathBuf,
     },
-    /// The dataset directory has no `manifest.json` (never finished, or not a dataset).
-    #[error("{path} not found: not a finished dataset")]
+    /// The dataset directory has no `manifest.json` (not a dataset, or its creation did not complete).
+    #[error("{path} not found: not a dataset")]
     ManifestMissing {
         /// Where the manifest was expected.
         path: PathBuf,
@@ -164,12 +164,103 @@ pub enum StoreError {
         /// The underlying error.
         source: arrow_schema::ArrowError,
     },
+    /// The disk (or the writer's test budget, see `DatasetWriter::with_write_budget`) is full. The call that failed
+    /// committed nothing, and everything committed before it is intact.
+    #[error("{op} {path}: the disk is full ({source}); nothing was committed by this call: free space, then resume")]
+    DiskFull {
+        /// What was being done.
+        op: &'static str,
+        /// The file or directory.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// `journal.jsonl` could not be used: a line the writer needs is unreadable, or the journal is not where a
+    /// dataset's journal should be.
+    #[error("{path}: journal: {reason}")]
+    Journal {
+        /// The journal file.
+        path: PathBuf,
+        /// What was wrong.
+        reason: String,
+    },
+    /// A batch file's rows are not the (point, actuator) keys its journal entry lists.
+    #[error("batch file {file}: its rows do not match its journal entry: {reason}")]
+    KeysMismatch {
+        /// File name.
+        file: String,
+        /// The first difference.
+        reason: String,
+    },
+    /// `DatasetWriter::resume` was given metadata that differs from the dataset's, and not told to force.
+    #[error(
+        "{dir}: the configuration differs from the dataset's ({}); resume with the original configuration, or force \
+         to continue anyway",
+        differences.join("; ")
+    )]
+    ConfigChanged {
+        /// The dataset directory.
+        dir: PathBuf,
+        /// One `key.path: old -> new` line per difference.
+        differences: Vec<String>,
+    },
+    /// Another writer (this process or another) holds the dataset's journal lock.
+    #[error("{path} is locked by another writer; only one writer may append to a dataset at a time")]
+    Locked {
+        /// The journal file.
+        path: PathBuf,
+    },
+    /// An earlier failure left this writer unable to tell what is on disk (for example a failed fsync of the
+    /// journal); it refuses further commits. Everything it committed is safe: resume the dataset to continue.
+    #[error("the writer of {dir} stopped after an earlier failure ({reason}); resume the dataset to continue")]
+    Poisoned {
+        /// The dataset directory.
+        dir: PathBuf,
+        /// The earlier failure.
+        reason: String,
+    },
+    /// A (point, actuator) pair asked for is not in the dataset.
+    #[error("the dataset has no response for point {point_index}, actuator {actuator}")]
+    NotInDataset {
+        /// Grid point index.
+        point_index: u32,
+        /// Actuator number.
+        actuator: u16,
+    },
+    /// Polars refused to scan the dataset (feature `polars`).
+    #[cfg(feature = "polars")]
+    #[error("{dir}: polars: {reason}")]
+    Polars {
+        /// The dataset directory.
+        dir: PathBuf,
+        /// Polars' message.
+        reason: String,
+    },
+    /// A WAV file could not be written.
+    #[error("{path}: wav: {reason}")]
+    Wav {
+        /// The WAV file.
+        path: PathBuf,
+        /// What was wrong.
+        reason: String,
+    },
 }
 
 impl StoreError {
-    /// An [`StoreError::Io`] error for `op` on `path`; a short constructor for `map_err`.
+    /// An error for `op` on `path`; a short constructor for `map_err`. A full disk or an exceeded quota becomes
+    /// [`StoreError::DiskFull`], anything else [`StoreError::Io`].
     pub(crate) fn io(op: &'static str, path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> Self {
         let path = path.into();
-        move |source| Self::Io { op, path, source }
+        move |source| Self::from_io(op, path, source)
+    }
+
+    /// As [`StoreError::io`], applied at once.
+    pub(crate) fn from_io(op: &'static str, path: PathBuf, source: std::io::Error) -> Self {
+        use std::io::ErrorKind;
+        if matches!(source.kind(), ErrorKind::StorageFull | ErrorKind::QuotaExceeded) {
+            Self::DiskFull { op, path, source }
+        } else {
+            Self::Io { op, path, source }
+        }
     }
 }

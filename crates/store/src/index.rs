@@ -31,6 +31,23 @@ pub(crate) struct Checked {
     sample_rate_hz: f64,
 }
 
+impl Checked {
+    /// `(point_index, actuator)` of every row, in order.
+    pub(crate) fn keys(&self) -> &[(u32, u16)] {
+        &self.keys
+    }
+
+    /// The IR length of the batch, samples.
+    pub(crate) fn ir_len(&self) -> usize {
+        self.ir_len
+    }
+
+    /// The sample rate of the batch, Hz.
+    pub(crate) fn sample_rate_hz(&self) -> f64 {
+        self.sample_rate_hz
+    }
+}
+
 impl RowIndex {
     /// Checks a batch labelled `label` (its file name) against `grid` and against every row accepted so far.
     ///
@@ -103,6 +120,57 @@ impl RowIndex {
         }
         self.ir_len = Some(checked.ir_len);
         self.sample_rate_hz = Some(checked.sample_rate_hz);
+    }
+
+    /// Takes a batch known only by its journal entry (keys, IR length, sample rate), without reading its rows.
+    ///
+    /// # Errors
+    /// [`StoreError::Duplicate`] or [`StoreError::Inconsistent`] against the rows accepted so far; nothing is taken.
+    pub(crate) fn restore(
+        &mut self,
+        label: &str,
+        keys: &[(u32, u16)],
+        ir_len: usize,
+        sample_rate_hz: f64,
+    ) -> Result<(), StoreError> {
+        let location = |row: usize| format!("{label} row {row}");
+        for (what, expected, found) in [
+            ("ir length (samples)", self.ir_len.map(|v| v.to_string()), ir_len.to_string()),
+            ("sample_rate_hz", self.sample_rate_hz.map(|v| v.to_string()), sample_rate_hz.to_string()),
+        ] {
+            if let Some(expected) = expected.filter(|e| *e != found) {
+                return Err(StoreError::Inconsistent { location: location(0), what, expected, found });
+            }
+        }
+        let mut in_batch = HashMap::new();
+        for (row, key) in keys.iter().enumerate() {
+            let first = self.rows.get(key).map(|&global| self.describe(global));
+            let first = first.or_else(|| in_batch.get(key).map(|&earlier| location(earlier)));
+            if let Some(first) = first {
+                return Err(StoreError::Duplicate {
+                    point_index: key.0,
+                    actuator: key.1,
+                    first,
+                    location: location(row),
+                });
+            }
+            in_batch.insert(*key, row);
+        }
+        if keys.is_empty() {
+            return Err(StoreError::EmptyBatch);
+        }
+        self.accept(Checked { label: label.to_string(), keys: keys.to_vec(), ir_len, sample_rate_hz });
+        Ok(())
+    }
+
+    /// Every `(point_index, actuator)` accepted, in no particular order.
+    pub(crate) fn keys(&self) -> impl Iterator<Item = (u32, u16)> + '_ {
+        self.rows.keys().copied()
+    }
+
+    /// Whether `(point_index, actuator)` was accepted.
+    pub(crate) fn contains(&self, key: (u32, u16)) -> bool {
+        self.rows.contains_key(&key)
     }
 
     /// Global row number of `(point_index, actuator)`.

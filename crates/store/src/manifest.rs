@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
 use crate::checksum;
-use crate::durable::{self, TEMP_SUFFIX};
+use crate::durable::{self, TEMP_SUFFIX, WriteBudget};
 use crate::error::StoreError;
 
 /// The schema version this build writes and reads. Bump it whenever a column or a manifest field changes meaning.
@@ -223,10 +223,15 @@ impl Manifest {
     /// # Errors
     /// [`StoreError::Io`].
     pub fn write(&self, dir: &Path) -> Result<(), StoreError> {
+        self.write_with(dir, &WriteBudget::default())
+    }
+
+    /// As [`Manifest::write`], drawing on a writer's budget.
+    pub(crate) fn write_with(&self, dir: &Path, budget: &WriteBudget) -> Result<(), StoreError> {
         let path = dir.join(MANIFEST_FILE);
         let text = serde_json::to_vec_pretty(self)
             .map_err(|e| StoreError::ManifestMalformed { path: path.clone(), reason: e.to_string() })?;
-        durable::write_file(dir, MANIFEST_FILE, |sink| {
+        durable::write_file(dir, MANIFEST_FILE, budget, |sink| {
             sink.write_all(&text).and_then(|()| sink.write_all(b"\n")).map_err(StoreError::io("write", &path))
         })?;
         Ok(())

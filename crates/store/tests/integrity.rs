@@ -8,7 +8,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use common::{meta, records};
-use metaplate_store::{BATCH_DIR, Dataset, DatasetWriter, IfExists, MANIFEST_FILE, StoreError};
+use metaplate_store::{BATCH_DIR, Dataset, DatasetWriter, IfExists, JOURNAL_FILE, MANIFEST_FILE, StoreError};
 
 const BATCH: &str = "batch-000000.parquet";
 
@@ -22,6 +22,12 @@ fn dataset(dir: &Path) {
     let mut writer = DatasetWriter::create(dir, meta(), IfExists::Refuse).unwrap();
     writer.commit_batch(&records(&[(0, 0), (1, 1)], &[0, 3], 64)).unwrap();
     writer.finish().unwrap();
+}
+
+/// Makes the dataset in `dir` look as written before the journal existed (manifest only), so that the tests below
+/// that tamper with the manifest's batch list exercise the manifest reader; with a journal, the journal decides.
+fn legacy(dir: &Path) {
+    fs::remove_file(dir.join(JOURNAL_FILE)).unwrap();
 }
 
 /// Rewrites the manifest through a JSON edit.
@@ -81,12 +87,15 @@ fn a_missing_batch_file_is_named() {
 }
 
 #[test]
-fn a_missing_manifest_means_not_a_finished_dataset() {
+fn a_commit_is_readable_before_finish_and_a_directory_without_manifest_is_not_a_dataset() {
     let dir = tempfile::tempdir().unwrap();
-    // Committed but never finished: batch files without a manifest.
+    // Committed but never finished (a run that stopped): the journal makes the batch readable.
     let mut writer = DatasetWriter::create(dir.path(), meta(), IfExists::Refuse).unwrap();
     writer.commit_batch(&records(&[(0, 0)], &[0], 4)).unwrap();
     drop(writer);
+    assert_eq!(Dataset::open(dir.path()).unwrap().len(), 1);
+    // Without its manifest the directory is not a dataset.
+    fs::remove_file(dir.path().join(MANIFEST_FILE)).unwrap();
     assert!(matches!(Dataset::open(dir.path()), Err(StoreError::ManifestMissing { .. })));
     // And a directory that does not exist at all.
     assert!(matches!(Dataset::open(dir.path().join("nowhere")), Err(StoreError::ManifestMissing { .. })));
@@ -142,6 +151,7 @@ fn a_newer_schema_version_is_reported_as_such() {
 fn a_row_count_that_disagrees_with_the_manifest_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     dataset(dir.path());
+    legacy(dir.path());
     edit_manifest(dir.path(), |j| j["batches"][0]["rows"] = 5.into());
     assert!(matches!(Dataset::open(dir.path()), Err(StoreError::RowCountMismatch { expected: 5, actual: 4, .. })));
 }
@@ -150,6 +160,7 @@ fn a_row_count_that_disagrees_with_the_manifest_is_refused() {
 fn a_batch_listed_twice_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     dataset(dir.path());
+    legacy(dir.path());
     edit_manifest(dir.path(), |j| {
         let first = j["batches"][0].clone();
         j["batches"].as_array_mut().unwrap().push(first);
@@ -180,6 +191,7 @@ fn duplicate_rows_across_files_are_refused_on_read() {
 /// Appends `b`'s only batch to `a` as `batch-000001.parquet`, listed with its true size and checksum: a hand-made
 /// merge that the writer would never produce.
 fn merge_second_dataset(a: &Path, b: &Path) {
+    legacy(a);
     fs::copy(batch_path(b, BATCH), batch_path(a, "batch-000001.parquet")).unwrap();
     let b_manifest: serde_json::Value =
         serde_json::from_str(&fs::read_to_string(b.join(MANIFEST_FILE)).unwrap()).unwrap();
@@ -234,6 +246,7 @@ fn patch_and_reseal(dir: &Path, from: &[u8], to: &[u8]) {
         bytes[i..i + from.len()].copy_from_slice(to);
     }
     fs::write(&path, &bytes).unwrap();
+    legacy(dir);
     edit_manifest(dir, |j| {
         j["batches"][0]["size_bytes"] = (bytes.len() as u64).into();
         j["batches"][0]["checksum"] = metaplate_store::sha256(&bytes).into();

@@ -6,7 +6,7 @@ mod common;
 
 use common::{bits, meta, records};
 use metaplate_store::{
-    BATCH_DIR, Dataset, DatasetWriter, IfExists, IrRecord, MANIFEST_FILE, Manifest, StoreError, sha256,
+    BATCH_DIR, Dataset, DatasetWriter, IfExists, IrRecord, JOURNAL_FILE, MANIFEST_FILE, Manifest, StoreError, sha256,
 };
 
 /// Two batches over a 4 x 3 grid and three actuators.
@@ -70,7 +70,7 @@ fn the_manifest_lists_each_file_with_its_true_size_and_sha256() {
         names.sort();
         names
     };
-    assert_eq!(names(dir.path()), [BATCH_DIR, MANIFEST_FILE]);
+    assert_eq!(names(dir.path()), [BATCH_DIR, JOURNAL_FILE, MANIFEST_FILE]);
     assert_eq!(names(&dir.path().join(BATCH_DIR)), ["batch-000000.parquet", "batch-000001.parquet"]);
 }
 
@@ -109,9 +109,11 @@ fn checkpoint_makes_progress_readable_and_can_be_repeated() {
     writer.checkpoint().unwrap();
     assert_eq!(Dataset::open(dir.path()).unwrap().len(), 1);
     writer.commit_batch(&records(&[(1, 0)], &[0], 8)).unwrap();
-    // The second batch is durable but not yet listed: readers still see the first checkpoint.
-    assert_eq!(Dataset::open(dir.path()).unwrap().len(), 1);
+    // The journal makes the second batch readable at once; the manifest's list still holds the first checkpoint.
+    assert_eq!(Dataset::open(dir.path()).unwrap().len(), 2);
+    assert_eq!(Manifest::read(dir.path()).unwrap().batches.len(), 1);
     writer.finish().unwrap();
+    assert_eq!(Manifest::read(dir.path()).unwrap().batches.len(), 2);
     assert_eq!(Dataset::open(dir.path()).unwrap().len(), 2);
 }
 

@@ -7,7 +7,7 @@ mod common;
 use std::fs;
 
 use common::{meta, records};
-use metaplate_store::{BATCH_DIR, Dataset, DatasetWriter, IfExists, StoreError};
+use metaplate_store::{BATCH_DIR, Dataset, DatasetWriter, IfExists, JOURNAL_FILE, MANIFEST_FILE, StoreError};
 
 fn entries(dir: &std::path::Path) -> Vec<String> {
     let mut names: Vec<_> = fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
@@ -97,7 +97,8 @@ fn finishing_an_empty_dataset_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let writer = DatasetWriter::create(dir.path(), meta(), IfExists::Refuse).unwrap();
     assert!(matches!(writer.finish(), Err(StoreError::EmptyDataset { .. })));
-    assert_eq!(entries(dir.path()), [BATCH_DIR]);
+    assert_eq!(entries(dir.path()), [BATCH_DIR, JOURNAL_FILE, MANIFEST_FILE]);
+    assert!(matches!(Dataset::open(dir.path()), Err(StoreError::EmptyDataset { .. })));
     assert!(entries(&dir.path().join(BATCH_DIR)).is_empty());
 }
 
@@ -118,7 +119,7 @@ fn a_non_empty_directory_is_refused_unless_replacing_a_dataset() {
     // Replaced: a stale temporary from a crash goes too, and the new dataset starts at batch 0.
     fs::write(dir.path().join(".batch-000001.parquet.tmp"), b"half").unwrap();
     let mut writer = DatasetWriter::create(dir.path(), meta(), IfExists::Replace).unwrap();
-    assert_eq!(entries(dir.path()), [BATCH_DIR]);
+    assert_eq!(entries(dir.path()), [BATCH_DIR, JOURNAL_FILE, MANIFEST_FILE]);
     assert!(entries(&dir.path().join(BATCH_DIR)).is_empty());
     writer.commit_batch(&records(&[(3, 2)], &[5], 8)).unwrap();
     writer.finish().unwrap();
@@ -138,7 +139,7 @@ fn replace_never_deletes_foreign_files() {
         other => panic!("expected NotEmpty, got {other:?}"),
     }
     // The refusal deleted nothing: the dataset still opens.
-    assert_eq!(entries(dir.path()), [BATCH_DIR, "manifest.json", "notes.txt"]);
+    assert_eq!(entries(dir.path()), [BATCH_DIR, JOURNAL_FILE, MANIFEST_FILE, "notes.txt"]);
     assert_eq!(Dataset::open(dir.path()).unwrap().len(), 1);
 }
 

@@ -71,7 +71,8 @@
 //! - The loopback is ideally low-passed at 12 kHz (the real DAQ would alias content above; drive signals have none).
 //! - Noise is white at the DAQ rate, approximately normal (Irwin-Hall of 4 uniforms), level-scaled per spot.
 //! - The beam must rest on a prepared point (within half a grid step); elsewhere the plate gives no velocity
-//!   (counted in [`LabStats::beam_off_prepared_points`]). Actuator positions themselves are not yet preparable.
+//!   (counted in [`LabStats::beam_off_prepared_points`]). Besides grid points, the actuators' own positions are
+//!   prepared (point index `grid.len() + k`, the plate crate's driving points), for calibration on the magnets.
 //! - Over a pseudo-terminal, LDV timeouts cost wall time (the real port waits) and no virtual time, and a disconnect
 //!   is seen as a timeout (see `PtyServer`).
 
@@ -163,7 +164,8 @@ pub struct LabOptions {
     pub seed: Option<u64>,
     /// Where Green's functions are cached (by scene hash and request); `None`: computed every time.
     pub cache_dir: Option<PathBuf>,
-    /// Flat grid indices to prepare; `None`: the scene's measured points.
+    /// Flat grid indices to prepare (`grid.len() + k`: actuator k's driving point); `None`: the scene's measured
+    /// points and every driving point.
     pub points: Option<Vec<usize>>,
     /// Plate discretisation.
     pub model: ModelOptions,
@@ -259,7 +261,14 @@ impl MockLab {
         if !(hi.is_finite() && hi > 0.0 && hi <= fs_g / 2.0) {
             return Err(LabError::InvalidOption { name: "band_hz", reason: format!("top {hi} Hz at {fs_g} Hz") });
         }
-        let points = options.points.clone().unwrap_or_else(|| scene.measured_points());
+        // By default the measured points and the actuators' driving points (index `grid.len() + k`, where the
+        // calibration recipe aims the beam, on the magnet).
+        let points = options.points.clone().unwrap_or_else(|| {
+            let grid_len = scene.grid.len();
+            let mut points = scene.measured_points();
+            points.extend((0..scene.actuators.len()).map(|k| grid_len + k));
+            points
+        });
         let request = GreensRequest {
             points: points.clone(),
             actuators: (0..scene.actuators.len()).collect(),
@@ -270,7 +279,7 @@ impl MockLab {
         let greens = greens_functions(&scene, &options.model, &request, options.cache_dir.as_deref())?;
         let coils = VoiceCoil::for_scene(&scene, scene.audio.sample_rate_hz)?;
         let plate = Arc::new(chain::Plate {
-            positions_m: points.iter().map(|&p| scene.grid.position_m(p)).collect(),
+            positions_m: points.iter().map(|&p| point_position_m(&scene, p)).collect(),
             tolerance_m: scene.grid.spacing_m / 2.0,
             greens,
             coils,
@@ -470,5 +479,13 @@ impl MockLab {
                 Ok(sum * coil.frequency_response(f))
             })
             .collect()
+    }
+}
+
+/// Where point `point` is, m: a grid point, or (from `grid.len()` on) an actuator's driving point.
+fn point_position_m(scene: &Scene, point: usize) -> (f64, f64) {
+    match point.checked_sub(scene.grid.len()).and_then(|k| scene.actuators.get(k)) {
+        Some(actuator) => (actuator.x_m, actuator.y_m),
+        None => scene.grid.position_m(point),
     }
 }

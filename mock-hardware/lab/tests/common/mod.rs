@@ -32,12 +32,17 @@ pub fn point(scene: &Scene) -> usize {
 /// A lab for `scene` preparing only the test point, coarse plate lattice, Green's functions cached under the
 /// target directory (shared by every test run).
 pub fn lab(scene: &Scene, seed: Option<u64>) -> MockLab {
+    lab_with_points(scene, seed, vec![point(scene)])
+}
+
+/// As [`lab`], preparing `points` (grid indices, or `grid.len() + k` for actuator k's driving point).
+pub fn lab_with_points(scene: &Scene, seed: Option<u64>, points: Vec<usize>) -> MockLab {
     let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("lab-greens");
     std::fs::create_dir_all(&cache).unwrap();
     let options = LabOptions {
         seed,
         cache_dir: Some(cache),
-        points: Some(vec![point(scene)]),
+        points: Some(points),
         model: ModelOptions { refinement: 1, threads: 2 },
         band_hz: BAND_HZ,
         ir_duration_s: 0.25,
