@@ -1,0 +1,157 @@
+//! How a caller steers a running recipe (stop requests, a test hook) and what the recipe tells it (events).
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering};
+
+/// Shared stop state of a run: the CLI's Ctrl-C handler raises it, the recipe reads it between steps.
+///
+/// Level 0: run. Level 1 (first Ctrl-C): finish the point in flight, commit it, stop. Level 2 (second Ctrl-C):
+/// abandon the point in flight (nothing of it is committed) and stop. Commits themselves are never interrupted,
+/// so neither level can corrupt the dataset.
+#[derive(Debug, Clone, Default)]
+pub struct RunControl {
+    level: Arc<AtomicU8>,
+    stop_after_commits: Arc<AtomicUsize>,
+}
+
+impl RunControl {
+    /// A control that never stops by itself.
+    pub fn new() -> Self {
+        Self { level: Arc::new(AtomicU8::new(0)), stop_after_commits: Arc::new(AtomicUsize::new(usize::MAX)) }
+    }
+
+    /// Raises the stop level by one (saturating at 2) and returns the new level: what a Ctrl-C handler calls.
+    pub fn request_stop(&self) -> u8 {
+        let previous = self.level.fetch_update(Ordering::AcqRel, Ordering::Acquire, |l| Some((l + 1).min(2)));
+        previous.map_or(2, |l| (l + 1).min(2))
+    }
+
+    /// The stop level: 0 run, 1 stop after the current commit, 2 abandon the point in flight.
+    pub fn level(&self) -> u8 {
+        self.level.load(Ordering::Acquire)
+    }
+
+    /// Whether the recipe should stop before starting the next point.
+    pub fn stop_requested(&self) -> bool {
+        self.level() >= 1
+    }
+
+    /// Whether the point in flight should be abandoned.
+    pub fn abandon_requested(&self) -> bool {
+        self.level() >= 2
+    }
+
+    /// Test hook: behave as if Ctrl-C were pressed once right after the `commits`-th commit of this run (counting
+    /// from 1; commits made by earlier runs of a resumed dataset do not count).
+    pub fn stop_after_commits(&self, commits: usize) {
+        self.stop_after_commits.store(commits, Ordering::Release);
+    }
+
+    /// Called by the recipe after each commit, with the number of commits made by this run.
+    pub(crate) fn committed(&self, commits_this_run: usize) {
+        if commits_this_run >= self.stop_after_commits.load(Ordering::Acquire) {
+            self.level.fetch_max(1, Ordering::AcqRel);
+        }
+    }
+}
+
+/// Something a recipe reports while it runs: the CLI turns these into a progress bar, log lines and `--json`
+/// progress events.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// The run starts: `total` units (points for a scan, actuators for a calibration), `done` of them already
+    /// committed by an earlier run.
+    Started {
+        /// Units in the whole run.
+        total: usize,
+        /// Units already committed (resume).
+        done: usize,
+    },
+    /// One unit committed.
+    Committed {
+        /// Grid point index (scan) or actuator number (calibration).
+        unit: usize,
+        /// Units committed so far, this run and earlier ones.
+        done: usize,
+        /// Units in the whole run.
+        total: usize,
+        /// Median SNR of the unit's rows, dB, when measured.
+        snr_db: Option<f64>,
+        /// Status of the unit's worst row, as stored (`valid`, `re-measured`, ...).
+        status: String,
+        /// Simulated or real seconds since the run started, on the rig's clock.
+        clock_s: f64,
+    },
+    /// A measurement is repeated (bounded retry) or a point deferred to the end of the run.
+    Retry {
+        /// Grid point index or actuator.
+        unit: usize,
+        /// Attempt number about to be made (1 is the first repetition).
+        attempt: u32,
+        /// Why.
+        reason: String,
+    },
+    /// A device fault was recovered (reconnect, reopen, settings re-applied).
+    Recovered {
+        /// What failed and what was done.
+        detail: String,
+    },
+    /// A device has been unreachable longer than the configured limit: the run is paused and keeps polling.
+    Paused {
+        /// What is being waited for.
+        detail: String,
+    },
+    /// The run stopped early on request; everything committed is kept.
+    Stopped {
+        /// Units committed.
+        done: usize,
+    },
+    /// The run completed.
+    Finished {
+        /// Units committed.
+        done: usize,
+    },
+}
+
+/// Receives a recipe's events (the CLI's progress display, a test's recorder).
+pub trait Observer {
+    /// Called for each event, on the recipe's thread.
+    fn event(&mut self, event: &Event);
+}
+
+/// An observer that ignores everything.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Silent;
+
+impl Observer for Silent {
+    fn event(&mut self, _event: &Event) {}
+}
+
+impl<F: FnMut(&Event)> Observer for F {
+    fn event(&mut self, event: &Event) {
+        self(event)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stop_levels_saturate_and_the_hook_raises_level_one() {
+        let control = RunControl::new();
+        assert!(!control.stop_requested());
+        assert_eq!(control.request_stop(), 1);
+        assert!(control.stop_requested() && !control.abandon_requested());
+        assert_eq!(control.request_stop(), 2);
+        assert_eq!(control.request_stop(), 2);
+        assert!(control.abandon_requested());
+
+        let hooked = RunControl::new();
+        hooked.stop_after_commits(3);
+        hooked.committed(2);
+        assert!(!hooked.stop_requested());
+        hooked.committed(3);
+        assert_eq!(hooked.level(), 1);
+    }
+}

@@ -1,0 +1,46 @@
+//! Why a recipe stopped.
+
+use metaplate_core::audio::AudioError;
+use metaplate_core::daq::DaqError;
+use metaplate_core::vibrometer::VibrometerError;
+use metaplate_dsp::DspError;
+use metaplate_store::StoreError;
+
+/// Why a recipe could not go on. Device faults that recovery handles never reach the caller; what does is either a
+/// configuration to fix, an instrument that refuses for good, or the store refusing to write.
+#[derive(Debug, thiserror::Error)]
+pub enum RecipeError {
+    /// The recipe's configuration or inputs are invalid (a wiring, a grid, a calibration that does not fit).
+    #[error("invalid recipe configuration: {0}")]
+    Config(String),
+    /// The vibrometer failed in a way recovery cannot fix (it refuses the command).
+    #[error(transparent)]
+    Vibrometer(#[from] VibrometerError),
+    /// The DAQ failed in a way recovery cannot fix.
+    #[error(transparent)]
+    Daq(#[from] DaqError),
+    /// The audio interface failed in a way recovery cannot fix.
+    #[error(transparent)]
+    Audio(#[from] AudioError),
+    /// Signal processing refused its input (a bug or a configuration outside the valid range, never a bad point:
+    /// those are flagged in the dataset).
+    #[error("signal processing: {0}")]
+    Dsp(#[from] DspError),
+    /// The dataset could not be written or read.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// The calibration dataset is missing, incomplete or inconsistent.
+    #[error("calibration {dir}: {reason}")]
+    Calibration {
+        /// The calibration directory.
+        dir: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The run was stopped on request (Ctrl-C) before it completed; everything committed so far is kept.
+    #[error("stopped on request after {committed} committed points; resume to continue")]
+    Interrupted {
+        /// Points (or actuators, for a calibration) committed in the dataset.
+        committed: usize,
+    },
+}

@@ -1,0 +1,342 @@
+//! One acquisition (DAQ recording while the audio interface plays), and recovery from device faults: reconnect,
+//! reopen, re-apply settings, poll while a device stays away.
+
+use metaplate_core::audio::{AudioConfig, AudioError};
+use metaplate_core::daq::{DaqChannel, DaqConfig, DaqError};
+use metaplate_core::rig::Rig;
+use metaplate_core::vibrometer::{VelocityScale, VibrometerError};
+
+use crate::control::{Event, Observer, RunControl};
+use crate::error::RecipeError;
+
+/// How long and how often a recipe waits for a device that went away.
+///
+/// Valid range: finite `poll_interval_s > 0`, finite `pause_after_s >= 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RecoveryPolicy {
+    /// Seconds between reconnection attempts (rig clock).
+    pub poll_interval_s: f64,
+    /// After this long without the device the run reports itself paused, and keeps polling (it never gives up on a
+    /// device that is merely absent: an overnight scan waits for someone to plug the cable back in).
+    pub pause_after_s: f64,
+}
+
+impl Default for RecoveryPolicy {
+    /// Poll every 2 s; report a pause after 60 s.
+    fn default() -> Self {
+        Self { poll_interval_s: 2.0, pause_after_s: 60.0 }
+    }
+}
+
+/// What one acquisition recorded, in volts at the DAQ rate, and what went wrong in it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Acquisition {
+    /// The velocity input, V.
+    pub velocity_v: Vec<f64>,
+    /// The loopback input, V.
+    pub loopback_v: Vec<f64>,
+    /// Some sample sat on a rail.
+    pub clipped: bool,
+    /// Samples were lost (packets lost, samples missing, overrun): the recording has a gap.
+    pub gap: bool,
+    /// Audio underruns during the playback.
+    pub underruns: u32,
+    /// The vibrometer's velocity scale in force.
+    pub scale: VelocityScale,
+}
+
+impl Acquisition {
+    /// Whether the recording is whole (no gap, no underrun); clipping is judged separately.
+    pub fn is_whole(&self) -> bool {
+        !self.gap && self.underruns == 0
+    }
+}
+
+/// A device failure, sorted by the remedy.
+#[derive(Debug)]
+pub(crate) enum Fault {
+    /// A link fault: reconnect or reopen the device, then repeat the step.
+    Link(Device, String),
+    /// The acquisition was spoiled (an overrun that ended it, a protocol hiccup): repeat it.
+    Spoiled(String),
+    /// Nothing a retry can fix.
+    Fatal(RecipeError),
+}
+
+/// Which instrument.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Device {
+    Vibrometer,
+    Daq,
+    Audio,
+}
+
+impl From<VibrometerError> for Fault {
+    fn from(e: VibrometerError) -> Self {
+        if e.suggests_reconnect() {
+            Fault::Link(Device::Vibrometer, e.to_string())
+        } else if matches!(e, VibrometerError::Protocol { .. }) {
+            Fault::Spoiled(e.to_string())
+        } else {
+            Fault::Fatal(e.into())
+        }
+    }
+}
+
+impl From<DaqError> for Fault {
+    fn from(e: DaqError) -> Self {
+        match e {
+            DaqError::Disconnected { .. } | DaqError::Timeout { .. } => Fault::Link(Device::Daq, e.to_string()),
+            DaqError::Overrun { .. } | DaqError::Protocol { .. } | DaqError::Device { .. } => {
+                Fault::Spoiled(e.to_string())
+            }
+            DaqError::Config { .. } | DaqError::Unavailable { .. } => Fault::Fatal(e.into()),
+        }
+    }
+}
+
+impl From<AudioError> for Fault {
+    fn from(e: AudioError) -> Self {
+        if e.suggests_reopen() {
+            Fault::Link(Device::Audio, e.to_string())
+        } else if matches!(e, AudioError::State { .. }) {
+            Fault::Spoiled(e.to_string())
+        } else {
+            Fault::Fatal(e.into())
+        }
+    }
+}
+
+/// Samples per channel of a DAQ block: 0.1 s at 24 kHz, a compromise between transfer overhead and how late a
+/// stop is noticed.
+const BLOCK_LEN_SAMPLES: u32 = 2400;
+
+/// The rig, configured for recipes: the DAQ on the velocity and loopback inputs, the audio interface at its rate.
+pub struct Instruments<'a> {
+    /// The rig.
+    pub rig: &'a mut Rig,
+    daq_config: DaqConfig,
+    audio_config: AudioConfig,
+    /// Velocity range requested, m/s (re-applied after a reconnect by the driver).
+    max_velocity_m_s: f64,
+    scale: Option<VelocityScale>,
+    policy: RecoveryPolicy,
+    /// Where the beam should be (re-applied after a reconnect).
+    beam_m: Option<(f64, f64)>,
+    /// Set by every recovery; a scan clears it after re-measuring its reference point.
+    pub(crate) recovered: bool,
+}
+
+impl<'a> Instruments<'a> {
+    /// Validates the wiring and configures the DAQ (velocity and loopback inputs) and the audio interface, with
+    /// recovery as `policy` says; the velocity range is set on first use.
+    ///
+    /// # Errors
+    /// [`RecipeError::Config`] for an invalid wiring; device errors that recovery cannot fix.
+    pub fn new(
+        rig: &'a mut Rig,
+        max_velocity_m_s: f64,
+        policy: RecoveryPolicy,
+        control: &RunControl,
+        observer: &mut dyn Observer,
+    ) -> Result<Self, RecipeError> {
+        rig.wiring.validate().map_err(RecipeError::Config)?;
+        let w = &rig.wiring;
+        let daq_config = DaqConfig {
+            channels: vec![
+                DaqChannel { input: w.velocity_input, range_v: w.daq_range_v },
+                DaqChannel { input: w.loopback_input, range_v: w.daq_range_v },
+            ],
+            sample_rate_hz: w.daq_sample_rate_hz,
+            block_len_samples: BLOCK_LEN_SAMPLES,
+        };
+        let audio_config = AudioConfig { sample_rate_hz: w.audio_sample_rate_hz, channels: w.audio_channels };
+        let mut me = Self {
+            rig,
+            daq_config,
+            audio_config,
+            max_velocity_m_s,
+            scale: None,
+            policy,
+            beam_m: None,
+            recovered: false,
+        };
+        me.with_recovery(control, observer, |i| i.configure())?;
+        me.recovered = false;
+        Ok(me)
+    }
+
+    /// Where the beam was last sent, m.
+    pub fn beam(&self) -> Option<(f64, f64)> {
+        self.beam_m
+    }
+
+    /// The DAQ sample rate, Hz.
+    pub fn daq_rate_hz(&self) -> f64 {
+        self.daq_config.sample_rate_hz
+    }
+
+    fn configure(&mut self) -> Result<(), Fault> {
+        self.rig.daq.configure(&self.daq_config)?;
+        self.rig.audio.configure(&self.audio_config)?;
+        // The laser on first: the level and velocity mean nothing without it (returns once it is stable).
+        self.rig.vibrometer.set_laser(true)?;
+        self.scale = Some(self.rig.vibrometer.set_velocity_range(self.max_velocity_m_s)?);
+        if let Some((x, y)) = self.beam_m {
+            self.rig.vibrometer.move_to(x, y)?;
+        }
+        Ok(())
+    }
+
+    /// Runs `step` until it succeeds, recovering from link faults (reconnect, reopen, re-apply every setting) and
+    /// repeating spoiled steps; gives up only on a fatal fault, or when a stop to abandon is requested while a
+    /// device is away.
+    pub(crate) fn with_recovery<T>(
+        &mut self,
+        control: &RunControl,
+        observer: &mut dyn Observer,
+        mut step: impl FnMut(&mut Self) -> Result<T, Fault>,
+    ) -> Result<T, RecipeError> {
+        // Spoiled steps are repeated a bounded number of times in a row; a device that spoils every step is broken.
+        const MAX_SPOILED_IN_A_ROW: u32 = 20;
+        let mut spoiled = 0;
+        loop {
+            match step(self) {
+                Ok(v) => return Ok(v),
+                Err(Fault::Fatal(e)) => return Err(e),
+                Err(Fault::Spoiled(detail)) => {
+                    spoiled += 1;
+                    tracing::warn!(%detail, "step spoiled, repeating");
+                    if spoiled >= MAX_SPOILED_IN_A_ROW {
+                        return Err(RecipeError::Config(format!(
+                            "{MAX_SPOILED_IN_A_ROW} attempts in a row failed, the last with: {detail}"
+                        )));
+                    }
+                    self.quiesce();
+                }
+                Err(Fault::Link(device, detail)) => {
+                    tracing::warn!(?device, %detail, "link fault, recovering");
+                    self.quiesce();
+                    self.reconnect(device, &detail, control, observer)?;
+                    observer.event(&Event::Recovered { detail: format!("{device:?}: {detail}") });
+                    self.recovered = true;
+                }
+            }
+        }
+    }
+
+    /// Best effort: stop whatever may be running so that the next step starts clean.
+    fn quiesce(&mut self) {
+        let _ = self.rig.daq.stop();
+        let _ = self.rig.audio.finish();
+    }
+
+    /// Reconnects `device` and re-applies every setting, polling on the rig's clock while it stays away.
+    fn reconnect(
+        &mut self,
+        device: Device,
+        detail: &str,
+        control: &RunControl,
+        observer: &mut dyn Observer,
+    ) -> Result<(), RecipeError> {
+        let clock = self.rig.clock.clone();
+        let started_s = clock.now_s();
+        let mut paused = false;
+        loop {
+            let attempt: Result<(), Fault> = match device {
+                Device::Vibrometer => self.rig.vibrometer.reconnect().map_err(Fault::from),
+                Device::Daq => self.rig.daq.reopen().map_err(Fault::from),
+                Device::Audio => self.rig.audio.reopen().map_err(Fault::from),
+            }
+            .and_then(|()| self.configure());
+            match attempt {
+                Ok(()) => return Ok(()),
+                Err(Fault::Fatal(e)) => return Err(e),
+                Err(Fault::Link(..) | Fault::Spoiled(_)) => {}
+            }
+            if control.abandon_requested() {
+                return Err(RecipeError::Interrupted { committed: 0 });
+            }
+            let away_s = clock.now_s() - started_s;
+            if !paused && away_s >= self.policy.pause_after_s {
+                paused = true;
+                let detail = format!("{device:?} unreachable for {away_s:.0} s ({detail}); paused, still polling");
+                tracing::error!("{detail}");
+                observer.event(&Event::Paused { detail });
+            }
+            clock.sleep_s(self.policy.poll_interval_s);
+        }
+    }
+
+    /// Moves the beam to (`x_m`, `y_m`) and reads the signal level there (0 to 1).
+    pub(crate) fn aim(&mut self, x_m: f64, y_m: f64) -> Result<f64, Fault> {
+        self.beam_m = Some((x_m, y_m));
+        self.rig.vibrometer.move_to(x_m, y_m)?;
+        Ok(self.rig.vibrometer.signal_level()?)
+    }
+
+    /// Plays `buffers` while recording `record_samples` samples per channel.
+    pub(crate) fn acquire(&mut self, buffers: &[Vec<f64>], record_samples: usize) -> Result<Acquisition, Fault> {
+        let scale = match self.scale {
+            Some(s) => s,
+            None => {
+                let s = self.rig.vibrometer.set_velocity_range(self.max_velocity_m_s)?;
+                self.scale = Some(s);
+                s
+            }
+        };
+        let result = self.record(buffers, record_samples, scale);
+        if result.is_err() {
+            self.quiesce();
+        }
+        result
+    }
+
+    fn record(
+        &mut self,
+        buffers: &[Vec<f64>],
+        record_samples: usize,
+        scale: VelocityScale,
+    ) -> Result<Acquisition, Fault> {
+        self.rig.daq.start()?;
+        if let Err(e) = self.rig.audio.start(buffers) {
+            let _ = self.rig.daq.stop();
+            return Err(e.into());
+        }
+        let mut velocity_v = Vec::with_capacity(record_samples + BLOCK_LEN_SAMPLES as usize);
+        let mut loopback_v = Vec::with_capacity(record_samples + BLOCK_LEN_SAMPLES as usize);
+        let (mut clipped, mut gap) = (false, false);
+        while velocity_v.len() < record_samples {
+            let block = self.rig.daq.read_block()?;
+            if block.volts.len() < 2 {
+                return Err(Fault::Spoiled(format!("DAQ block with {} channels, expected 2", block.volts.len())));
+            }
+            clipped |= block.integrity.clipped;
+            gap |= !block.integrity.is_contiguous();
+            velocity_v.extend_from_slice(&block.volts[0]);
+            loopback_v.extend_from_slice(&block.volts[1]);
+        }
+        velocity_v.truncate(record_samples);
+        loopback_v.truncate(record_samples);
+        let report = self.rig.audio.finish()?;
+        self.rig.daq.stop()?;
+        Ok(Acquisition { velocity_v, loopback_v, clipped, gap, underruns: report.underruns, scale })
+    }
+
+    /// Asks for a larger velocity range after clipping: ten times the current full scale, if the instrument has
+    /// one. Returns whether the range grew.
+    pub(crate) fn widen_range(&mut self) -> Result<bool, Fault> {
+        let current = self.scale.map_or(self.max_velocity_m_s, |s| s.full_scale_m_s);
+        let wanted = current * 10.0;
+        match self.rig.vibrometer.set_velocity_range(wanted) {
+            Ok(s) => {
+                let grew = s.full_scale_m_s > current;
+                self.max_velocity_m_s = wanted;
+                self.scale = Some(s);
+                Ok(grew)
+            }
+            Err(VibrometerError::InvalidArgument { .. }) => Ok(false),
+            Err(e) => Err(e.into()),
+        }
+    }
+}

@@ -1,0 +1,94 @@
+//! Quality measures and gates shared by the recipes.
+
+use metaplate_dsp::{DspError, fft};
+
+/// Flatness of a response over a band: its magnitude in dB at every FFT bin within `[lo_hz, hi_hz]`, relative to
+/// the median of those bins.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Flatness {
+    /// Median magnitude over the band, dB re 1 (response units).
+    pub median_db: f64,
+    /// Lowest bin relative to the median, dB (<= 0).
+    pub min_db: f64,
+    /// Highest bin relative to the median, dB (>= 0).
+    pub max_db: f64,
+}
+
+impl Flatness {
+    /// The larger excursion from the median, dB (>= 0).
+    pub fn deviation_db(&self) -> f64 {
+        self.max_db.max(-self.min_db)
+    }
+}
+
+/// Flatness of `ir` (sampled at `sample_rate_hz`) over `[lo_hz, hi_hz]`, from its zero-padded FFT (at least
+/// twice its length, so the bins are spaced at most half the response's own resolution).
+///
+/// Valid range: a finite, non-empty `ir`; `0 <= lo_hz < hi_hz <= sample_rate_hz / 2` with at least one bin inside
+/// (the band at least `sample_rate_hz / (2 len)` wide).
+///
+/// # Errors
+/// [`DspError::Empty`] / [`DspError::NonFinite`] for `ir`; [`DspError::InvalidParameter`] for a band holding no bin
+/// or a response that is zero somewhere in the band (its level in dB would be -infinity).
+pub fn flatness(ir: &[f64], sample_rate_hz: f64, lo_hz: f64, hi_hz: f64) -> Result<Flatness, DspError> {
+    metaplate_dsp::error::check_signal("response", ir)?;
+    let n = fft::fast_len(2 * ir.len())?;
+    let spectrum = fft::forward(ir, n)?;
+    let mut levels_db = Vec::new();
+    for (k, c) in spectrum.iter().enumerate() {
+        let f = fft::bin_freq_hz(k, n, sample_rate_hz);
+        if (lo_hz..=hi_hz).contains(&f) {
+            let magnitude = c.norm();
+            if magnitude <= 0.0 {
+                return Err(DspError::InvalidParameter {
+                    name: "response",
+                    reason: format!("is zero at {f:.1} Hz, inside the band"),
+                });
+            }
+            levels_db.push(20.0 * magnitude.log10());
+        }
+    }
+    let median_db = median(&mut levels_db).ok_or_else(|| DspError::InvalidParameter {
+        name: "band",
+        reason: format!("{lo_hz} to {hi_hz} Hz holds no bin of a {n}-point FFT at {sample_rate_hz} Hz"),
+    })?;
+    let (min, max) = levels_db.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+    Ok(Flatness { median_db, min_db: min - median_db, max_db: max - median_db })
+}
+
+/// Median of finite values (sorts in place); `None` for an empty slice. Even counts average the middle two.
+pub fn median(values: &mut [f64]) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_unstable_by(f64::total_cmp);
+    let mid = values.len() / 2;
+    Some(if values.len().is_multiple_of(2) { (values[mid - 1] + values[mid]) / 2.0 } else { values[mid] })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_impulse_is_flat_and_a_two_tap_comb_is_not() {
+        let mut impulse = vec![0.0; 64];
+        impulse[3] = 2.0;
+        let f = flatness(&impulse, 24_000.0, 100.0, 5000.0).unwrap();
+        // |FFT| of a scaled impulse is exactly 2 at every bin: rounding only.
+        assert!((f.median_db - 20.0 * 2f64.log10()).abs() < 1e-12 && f.deviation_db() < 1e-12, "{f:?}");
+        // h = [1, 0.5]: |H| ranges from 0.5 to 1.5 over the full band, a 9.5 dB spread.
+        let comb = [1.0, 0.5];
+        let f = flatness(&comb, 24_000.0, 0.0, 12_000.0).unwrap();
+        assert!((f.max_db - f.min_db - 20.0 * 3f64.log10()).abs() < 1e-9, "{f:?}");
+        assert!(flatness(&comb, 24_000.0, 100.0, 101.0).is_err());
+        assert!(flatness(&[], 24_000.0, 0.0, 1.0).is_err());
+    }
+
+    #[test]
+    fn median_of_odd_even_and_empty() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), Some(2.5));
+        assert_eq!(median(&mut []), None);
+    }
+}
