@@ -110,6 +110,10 @@ struct Rendered {
 pub(crate) struct DaqRun {
     pub id: u64,
     pub t0_s: f64,
+    /// Seeds the LDV noise of this acquisition: set from the playback it records (see [`LabState::schedule`]),
+    /// so that the same measurement draws the same noise in any session (a resumed scan equals an uninterrupted
+    /// one); from the run counter when nothing plays.
+    pub noise_key: u64,
 }
 
 /// Counters for tests and logs.
@@ -140,6 +144,8 @@ pub(crate) struct LabState {
     drive_order: Vec<u64>,
     run: Option<DaqRun>,
     next_run: u64,
+    /// Plays of each drive buffer at each beam site: (site hash, buffer hash) -> count.
+    occurrences: HashMap<(u64, u64), u64>,
     pub stats: LabStats,
     /// Scratch buffers reused across renders (no per-playback allocation of the big spectra).
     spectrum: Vec<Complex64>,
@@ -168,6 +174,7 @@ impl LabState {
             drive_order: Vec::new(),
             run: None,
             next_run: 0,
+            occurrences: HashMap::new(),
             stats: LabStats::default(),
             spectrum: Vec::new(),
             time: Vec::new(),
@@ -176,19 +183,33 @@ impl LabState {
 
     /// A DAQ acquisition started now.
     pub fn daq_started(&mut self) {
-        self.run = Some(DaqRun { id: self.next_run, t0_s: self.clock.now_s() });
+        let noise_key = mix64(self.params.seed ^ mix64(self.next_run.wrapping_add(0x0015_E000)));
+        self.run = Some(DaqRun { id: self.next_run, t0_s: self.clock.now_s(), noise_key });
         self.next_run += 1;
     }
 
     /// Schedules a playback: where the beam is, whether a random dropout strikes it.
     fn schedule(&mut self, playback: &Playback, beam: Option<(f64, f64)>) {
-        let index = self.stats.playbacks;
         self.stats.playbacks += 1;
         let point_k = beam.and_then(|(x, y)| self.plate.point_at(x, y));
         if beam.is_some() && point_k.is_none() {
             self.stats.beam_off_prepared_points += 1;
         }
-        let draw = mix64(self.params.seed ^ mix64(index ^ 0xD40F_0D40));
+        // Random draws are keyed by what is measured, not by the session's history: the beam position (whole
+        // micrometres), the drive buffer, and how many times this lab has played that buffer there. A scan that
+        // resumes after a crash replays the same measurements in the same order per point, so it draws the same
+        // noise and dropouts as an uninterrupted run.
+        let key = hash_samples(&playback.samples, playback.channels);
+        let site = beam.map_or(u64::MAX, |(x, y)| {
+            mix64(((x * 1e6).round() as i64 as u64) ^ mix64((y * 1e6).round() as i64 as u64))
+        });
+        let occurrence = self.occurrences.entry((site, key)).or_insert(0);
+        let measurement = mix64(self.params.seed ^ mix64(site ^ mix64(key ^ *occurrence)));
+        *occurrence += 1;
+        if let Some(run) = self.run.as_mut() {
+            run.noise_key = mix64(measurement ^ 0x0015_E000);
+        }
+        let draw = mix64(measurement ^ 0xD40F_0D40);
         let dropout_s = (unit_open(draw) < self.params.dropout_probability).then(|| {
             let at = playback.start_s + unit_open(mix64(draw)) * (playback.end_s() - playback.start_s);
             (at, at + DROPOUT_MIN_S + DROPOUT_SPAN_S * unit_open(mix64(draw ^ 1)))
@@ -200,7 +221,6 @@ impl LabState {
                 ldv.controller_mut().start_dropout(1);
             }
         }
-        let key = hash_samples(&playback.samples, playback.channels);
         self.playbacks.push(Scheduled {
             playback: playback.clone(),
             key,
@@ -338,7 +358,7 @@ impl LabState {
         let level = f64::from(self.speckle.level_percent(position.x.um(), position.y.um())) / 100.0;
         let full_scale = range.full_scale_m_per_s();
         let noise = self.params.noise_rms_m_s / level.max(MIN_NOISE_LEVEL);
-        let key = mix64(self.params.seed ^ mix64(run.id.wrapping_add(0x0015_E000)));
+        let key = run.noise_key;
         for (i, v) in out.iter_mut().enumerate() {
             *v += noise * approx_normal(mix64(key ^ (first + i as u64)));
         }
