@@ -4,13 +4,26 @@
 //! frequency, as in the paper's Wave Field Analysis, with per-actuator estimates summarised across actuators.
 //! [`wavelength::local`]: the plate-equation (biharmonic Rayleigh quotient) wavelength, free of the k-space
 //! method's aperture limit. [`dispersion`]: both, for every actuator's field at one frequency, from a propagation
-//! response. (POD, singular-value authority, pixel area and refresh rate will join them.)
+//! response.
+//! [`pod`]: spatial response dimensionality (POD of the actuator-summed response). [`authority`]: singular-value
+//! effective rank and condition number of `G_D(omega)` over square domains. [`refresh`]: the shortest resolvable
+//! spacing of two focused pulses, with the closed-form single-pixel focusing of [`focus`]. [`response`]: the mean
+//! driven response. [`report`]: all of them on one plate. [`bands`]: the operating band.
 //!
 //! Every public routine checks its input: an empty or mismatched input, a NaN or infinity, or a parameter outside the
 //! routine's stated valid range is an [`AnalysisError`], never a panic and never a NaN in the result.
 
+pub mod authority;
+pub mod bands;
 pub mod dispersion;
 pub mod error;
+pub mod pixel;
+pub mod focus;
+mod linalg;
+pub mod pod;
+pub mod refresh;
+pub mod report;
+pub mod response;
 pub mod wavelength;
 
 pub use error::AnalysisError;

@@ -4,9 +4,11 @@
 
 use clap::{Parser, Subcommand};
 
+mod analyze;
 mod deconvolve;
 mod demo;
 mod progress;
+mod replay;
 mod scene;
 mod simulate;
 mod sweep;
@@ -25,6 +27,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The paper's Wave Field Analysis on a dataset: wavelength, pixel area, POD, authority, refresh, driven
+    /// response (JSON with --json), and its figures with --figures DIR.
+    Analyze(analyze::AnalyzeArgs),
     /// The main job: run the suite end to end on the built-in simulated plates and print the paper-against-suite
     /// table.
     Demo(demo::DemoArgs),
@@ -34,6 +39,9 @@ enum Command {
     Sweep(sweep::SweepArgs),
     /// List the built-in scenes, or show one (or a scene file) fully resolved.
     Scene(scene::SceneArgs),
+    /// Replay a recorded device session (cassette) through its driver, optionally with faults; or record one
+    /// against a mock device (--record-mock).
+    Replay(replay::ReplayArgs),
     /// The simulated plate's ground truth: dispersion, Green's functions.
     Simulate {
         #[command(subcommand)]
@@ -44,10 +52,12 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
+        Command::Analyze(args) => analyze::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Deconvolve(args) => deconvolve::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
+        Command::Replay(args) => replay::run(&args),
         Command::Simulate { command } => simulate::run(&command),
     }
 }

@@ -1,1 +1,20 @@
-//! Figures (PNG and SVG, plotters with a bundled font): wavelength, focus snapshots, pixel-area maps, POD and singular-value energy.
+//! Figures of the paper's analyses, each written as PNG and SVG: wavelength against frequency, focus snapshots, the
+//! virtual-pixel-area map, POD energy, singular-value energy and condition numbers (plus the driven response).
+//!
+//! Text is set in DejaVu Sans, bundled in the crate (`fonts/`, Bitstream Vera licence) and read by ab_glyph: no
+//! system font, fontconfig or font-kit is ever consulted, so figures look the same on every machine and in CI.
+//!
+//! Each figure function takes plain data (no analysis types, so any source can plot) and writes `<name>.png` and
+//! `<name>.svg` into a directory, returning both paths.
+
+mod colour;
+mod maps;
+mod plots;
+mod render;
+
+pub use maps::{focus_snapshots, pixel_area_map};
+pub use plots::{
+    Curve, SingularValueSeries, WavelengthSeries, condition_numbers, driven_response, pod_energy,
+    singular_value_energy, wavelength,
+};
+pub use render::{FigureError, Written};

@@ -1,0 +1,234 @@
+//! `metaplate analyze`: the paper's Wave Field Analysis on a dataset (wavelength, pixel area, POD, authority,
+//! refresh, driven response), as one JSON object or a short table, and optionally its figures.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::Args;
+use metaplate_analysis::AnalysisError;
+use metaplate_analysis::authority::DomainAuthority;
+use metaplate_analysis::focus::focus_snapshot;
+use metaplate_analysis::pixel::{PixelAreaMap, PixelAreaOptions, pixel_area_map};
+use metaplate_analysis::report::{PlateReport, ReportOptions, analyse};
+use metaplate_control::PropagationMatrices;
+use metaplate_core::grid::GridSpec;
+use metaplate_figures as figures;
+use metaplate_store::Dataset;
+use serde_json::{Value, json};
+
+/// Band of the propagation matrices, Hz: the refresh pulse's skirts (50 Hz) up to the wavelength's 600 Hz.
+const G_BAND_HZ: (f64, f64) = (50.0, 625.0);
+
+/// Instants of the focus snapshots relative to the focus time, s.
+const SNAPSHOT_TAUS_S: [f64; 5] = [-0.004, -0.002, 0.0, 0.002, 0.004];
+
+/// Arguments of `metaplate analyze`.
+#[derive(Args)]
+pub struct AnalyzeArgs {
+    /// Dataset directory (a scan or `metaplate simulate greens`).
+    #[arg(long)]
+    data: PathBuf,
+    /// Print one JSON object on stdout instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Write the figures (PNG and SVG) into this directory.
+    #[arg(long)]
+    figures: Option<PathBuf>,
+}
+
+/// Runs `metaplate analyze`.
+pub fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
+    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
+    let grid = dataset.manifest().meta.grid;
+    let g = PropagationMatrices::from_dataset(&dataset, G_BAND_HZ, None).context("building G(omega)")?;
+    let report = analyse(&g, &grid, &ReportOptions::default())?;
+    let mut mask = vec![false; grid.len()];
+    for &p in g.points() {
+        if let Some(m) = mask.get_mut(p as usize) {
+            *m = true;
+        }
+    }
+    let pixels = pixel_area_map(&g, &grid, &mask, &PixelAreaOptions::default());
+    let mut out = to_json(&report, pixels.as_ref());
+    out["dataset"] = json!(args.data.display().to_string());
+    out["scene"] = json!(dataset.manifest().meta.scene.name);
+    out["points"] = json!(g.n_points());
+    out["actuators"] = json!(g.n_actuators());
+    if let Some(dir) = &args.figures {
+        let written = write_figures(dir, &dataset.manifest().meta.scene.name, &g, &grid, &report, pixels.as_ref())?;
+        out["figures"] = json!(written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        print_table(&out);
+    }
+    Ok(())
+}
+
+/// Domain edge as the JSON key, in cm with one decimal ("9.5").
+fn edge_key(edge_m: f64) -> String {
+    format!("{:.1}", edge_m * 100.0)
+}
+
+fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) -> Value {
+    let mut errors = serde_json::Map::new();
+    let mut keep = |key: String, e: &AnalysisError| {
+        errors.insert(key, json!(e.to_string()));
+    };
+    let wavelength: Vec<Value> = report
+        .wavelength
+        .iter()
+        .map(|w| match &w.summary {
+            Ok(s) => json!({"freq_hz": w.freq_hz, "median_m": s.median_m, "iqr_m": [s.iqr_m.0, s.iqr_m.1]}),
+            Err(e) => json!({"freq_hz": w.freq_hz, "median_m": null, "iqr_m": null, "error": e.to_string()}),
+        })
+        .collect();
+    let (mut rank, mut kappa) = (serde_json::Map::new(), serde_json::Map::new());
+    for (edge_m, a) in &report.authority {
+        let key = edge_key(*edge_m);
+        match a {
+            Ok(a) => {
+                rank.insert(key.clone(), json!(a.mean_effective_rank()));
+                kappa.insert(key, json!(a.mean_condition_number()));
+            }
+            Err(e) => {
+                keep(format!("authority {key} cm"), e);
+                rank.insert(key.clone(), Value::Null);
+                kappa.insert(key, Value::Null);
+            }
+        }
+    }
+    let pod = report.pod.as_ref().map_err(|e| keep("pod".into(), e)).ok();
+    let refresh = report.refresh.as_ref().map_err(|e| keep("refresh".into(), e)).ok();
+    let response = report.driven_response.as_ref().map_err(|e| keep("driven_response".into(), e)).ok();
+    let pixels = pixels.map_err(|e| keep("pixel_area".into(), e)).ok();
+    json!({
+        "wavelength": wavelength,
+        "median_pixel_area_cm2": pixels.and_then(PixelAreaMap::median_area_cm2),
+        "pixel_area_flagged_fraction": pixels.map(PixelAreaMap::flagged_fraction),
+        "pod_components_99": pod.map(|p| p.components),
+        "pod_energy": pod.map(|p| p.energy.iter().take(64).collect::<Vec<_>>()),
+        "effective_rank": rank,
+        "condition_number": kappa,
+        "refresh_ms": refresh.map(|r| r.refresh_s * 1e3),
+        "driven_response": response.map(|r| r.freqs_hz.iter().zip(&r.mean_magnitude)
+            .map(|(f, m)| json!({"freq_hz": f, "mean_abs": m})).collect::<Vec<_>>()),
+        "errors": errors,
+    })
+}
+
+fn print_table(out: &Value) {
+    let show = |v: &Value| v.as_f64().map_or_else(|| "-".to_owned(), |x| format!("{x:.2}"));
+    println!("dataset {} ({}, {} points)", out["dataset"], out["scene"], out["points"]);
+    println!("median pixel area (cm^2)   {}", show(&out["median_pixel_area_cm2"]));
+    println!("POD components (99 %)      {}", out["pod_components_99"]);
+    for key in ["9.5", "6.5", "3.5"] {
+        println!(
+            "d = {key} cm: effective rank {}, condition number {}",
+            show(&out["effective_rank"][key]),
+            show(&out["condition_number"][key])
+        );
+    }
+    println!("refresh (ms)               {}", show(&out["refresh_ms"]));
+    for w in out["wavelength"].as_array().into_iter().flatten() {
+        println!("wavelength at {:>5} Hz: {} m", w["freq_hz"], show(&w["median_m"]));
+    }
+    if let Some(errors) = out["errors"].as_object() {
+        for (k, e) in errors {
+            println!("not computed: {k}: {e}");
+        }
+    }
+}
+
+/// Writes every figure of one plate; returns the files written.
+fn write_figures(
+    dir: &Path,
+    label: &str,
+    g: &PropagationMatrices,
+    grid: &GridSpec,
+    report: &PlateReport,
+    pixels: Result<&PixelAreaMap, &AnalysisError>,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
+    let mut add = |w: figures::Written| written.extend([w.png, w.svg]);
+    let ok: Vec<_> = report.wavelength.iter().filter_map(|w| w.summary.as_ref().ok().map(|s| (w.freq_hz, s))).collect();
+    if !ok.is_empty() {
+        add(figures::wavelength(
+            dir,
+            "wavelength",
+            &[figures::WavelengthSeries {
+                label: label.to_owned(),
+                freqs_hz: ok.iter().map(|w| w.0).collect(),
+                median_m: ok.iter().map(|w| w.1.median_m).collect(),
+                iqr_m: ok.iter().map(|w| w.1.iqr_m).collect(),
+            }],
+        )?);
+    }
+    if let Some(row) = centre_row(g, grid) {
+        let opts = ReportOptions::default().refresh;
+        let mut snaps = Vec::new();
+        for tau in SNAPSHOT_TAUS_S {
+            let field = focus_snapshot(g, row, &opts.band, opts.method, tau)?;
+            snaps.push((format!("t = {:+.0} ms", tau * 1e3), on_grid(grid, g.points(), &field)));
+        }
+        add(figures::focus_snapshots(dir, "focus_snapshots", grid, &snaps)?);
+    }
+    if let Ok(p) = pixels
+        && let Some(median) = p.median_area_cm2()
+    {
+        let values: Vec<f64> = p.area_cm2.iter().map(|a| a.unwrap_or(f64::NAN)).collect();
+        let title = format!("{label}: virtual-pixel area, median {median:.2} cm^2");
+        add(figures::pixel_area_map(dir, "pixel_area", grid, &on_grid(grid, &p.points, &values), &title)?);
+    }
+    if let Ok(pod) = &report.pod {
+        let points = pod.energy.iter().take(64).enumerate().map(|(i, &e)| ((i + 1) as f64, e)).collect();
+        add(figures::pod_energy(dir, "pod_energy", &[figures::Curve { label: label.to_owned(), points }])?);
+    }
+    let domains: Vec<&DomainAuthority> = report.authority.iter().filter_map(|(_, a)| a.as_ref().ok()).collect();
+    if !domains.is_empty() {
+        let series: Vec<figures::SingularValueSeries> = domains
+            .iter()
+            .map(|a| {
+                let (mean_db, std_db) = a.relative_energy_db_stats().into_iter().unzip();
+                figures::SingularValueSeries {
+                    label: format!("{label}, d = {} cm", edge_key(a.edge_m)),
+                    mean_db,
+                    std_db,
+                }
+            })
+            .collect();
+        add(figures::singular_value_energy(dir, "singular_value_energy", &series)?);
+        let points = domains.iter().map(|a| (a.edge_m * 100.0, a.mean_condition_number())).collect();
+        add(figures::condition_numbers(
+            dir,
+            "condition_numbers",
+            &[figures::Curve { label: label.to_owned(), points }],
+        )?);
+    }
+    if let Ok(r) = &report.driven_response {
+        let points = r.freqs_hz.iter().copied().zip(r.mean_magnitude.iter().copied()).collect();
+        add(figures::driven_response(dir, "driven_response", &[figures::Curve { label: label.to_owned(), points }])?);
+    }
+    Ok(written)
+}
+
+/// Row of `g` nearest the grid's frame origin (the plate centre).
+fn centre_row(g: &PropagationMatrices, grid: &GridSpec) -> Option<usize> {
+    let dist = |p: u32| {
+        let (x, y) = grid.position_m(p as usize);
+        x * x + y * y
+    };
+    (0..g.n_points()).min_by(|&a, &b| dist(g.points()[a]).total_cmp(&dist(g.points()[b])))
+}
+
+/// Per-point values laid on the grid, `None` where unmeasured or not finite.
+fn on_grid(grid: &GridSpec, points: &[u32], values: &[f64]) -> Vec<Option<f64>> {
+    let mut out = vec![None; grid.len()];
+    for (&p, &v) in points.iter().zip(values) {
+        if let Some(slot) = out.get_mut(p as usize) {
+            *slot = v.is_finite().then_some(v);
+        }
+    }
+    out
+}

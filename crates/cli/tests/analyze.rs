@@ -1,0 +1,92 @@
+//! `metaplate analyze` on a small ground-truth dataset: the JSON object has the keys with sane values, and
+//! the figures are written.
+
+#![allow(clippy::unwrap_used)] // helpers outside #[test] functions unwrap too: a failure is a failed test
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn metaplate(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("analyze-cli").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn analyze_prints_the_paper_quantities_and_writes_figures() {
+    let dir = scratch("meta13x7");
+    let data = dir.join("data");
+    // A 13 x 7 subset (83 measured points) of the metamaterial plate: enough for every analysis but the 3.5 cm
+    // domain, which holds fewer points than actuators on so sparse a grid.
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
+    std::fs::create_dir_all(&cache).unwrap();
+    let sim = metaplate(&[
+        "simulate",
+        "greens",
+        "--scene",
+        "metamaterial",
+        "--grid",
+        "13x7",
+        "--out",
+        data.to_str().unwrap(),
+        "--cache-dir",
+        cache.to_str().unwrap(),
+    ]);
+    assert!(sim.status.success(), "{}", String::from_utf8_lossy(&sim.stderr));
+    let figs = dir.join("figures");
+    let out = metaplate(&["analyze", "--data", data.to_str().unwrap(), "--json", "--figures", figs.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+
+    // Wavelength: 75 to 600 Hz every 25 Hz, each median inside its quartiles, between two grid steps (1 cm) and
+    // the plate's length (25 cm), and the 600 Hz one shorter than the 75 Hz one (the plate disperses).
+    let wl = v["wavelength"].as_array().unwrap();
+    assert_eq!(wl.len(), 22);
+    for w in wl {
+        let (m, lo, hi) =
+            (w["median_m"].as_f64().unwrap(), w["iqr_m"][0].as_f64().unwrap(), w["iqr_m"][1].as_f64().unwrap());
+        assert!(lo <= m && m <= hi && (0.01..0.25).contains(&m), "{w}");
+    }
+    assert!(wl[21]["median_m"].as_f64().unwrap() < wl[0]["median_m"].as_f64().unwrap());
+
+    // POD: at least one component, and no more than the points or twice the band's bins.
+    let pod = v["pod_components_99"].as_u64().unwrap();
+    assert!((1..=83).contains(&pod), "{pod}");
+    // Authority: 9.5 and 6.5 cm computed, rank within 1..=8 and kappa >= 1; 3.5 cm null with its reason.
+    for key in ["9.5", "6.5"] {
+        let r = v["effective_rank"][key].as_f64().unwrap();
+        let k = v["condition_number"][key].as_f64().unwrap();
+        assert!((1.0..=8.0).contains(&r) && k >= 1.0, "{key}: rank {r}, kappa {k}");
+    }
+    assert!(v["effective_rank"]["3.5"].is_null() && v["errors"]["authority 3.5 cm"].is_string());
+    // Refresh: between one spacing step (0.1 ms) and the search's 30 ms.
+    let refresh = v["refresh_ms"].as_f64().unwrap();
+    assert!((0.1..=30.0).contains(&refresh), "{refresh}");
+    // Pixel area: the key is present (null here: no point of so sparse a grid has measured neighbours all round).
+    assert!(v.get("median_pixel_area_cm2").is_some());
+    // Driven response: one entry per bin of 75 to 400 Hz, all positive.
+    let resp = v["driven_response"].as_array().unwrap();
+    assert!(resp.len() > 100 && resp.iter().all(|r| r["mean_abs"].as_f64().unwrap() > 0.0));
+
+    for name in ["wavelength", "focus_snapshots", "pod_energy", "singular_value_energy", "condition_numbers"] {
+        for ext in ["png", "svg"] {
+            let path = figs.join(format!("{name}.{ext}"));
+            assert!(std::fs::metadata(&path).map(|m| m.len() > 1000).unwrap_or(false), "{}", path.display());
+        }
+    }
+}
+
+#[test]
+fn analyze_refuses_a_directory_that_is_not_a_dataset() {
+    let dir = scratch("empty");
+    let out = metaplate(&["analyze", "--data", dir.to_str().unwrap(), "--json"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("opening dataset"));
+}

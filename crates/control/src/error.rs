@@ -1,0 +1,97 @@
+//! The one error type of this crate.
+
+use metaplate_dsp::DspError;
+use metaplate_store::StoreError;
+
+/// Why a control routine refused its input or could not produce a finite result.
+#[derive(Debug, thiserror::Error)]
+pub enum ControlError {
+    /// A parameter lies outside the routine's valid range.
+    #[error("invalid {name}: {reason}")]
+    InvalidParameter {
+        /// Parameter name, with its unit where it has one.
+        name: &'static str,
+        /// What was wrong and what is accepted.
+        reason: String,
+    },
+    /// Two inputs that must match in size do not.
+    #[error("{what}: sizes {a} and {b} differ")]
+    LengthMismatch {
+        /// What was compared.
+        what: &'static str,
+        /// First size.
+        a: usize,
+        /// Second size.
+        b: usize,
+    },
+    /// An input had no elements where at least one is needed.
+    #[error("{input} is empty")]
+    Empty {
+        /// Which input.
+        input: &'static str,
+    },
+    /// The dataset lacks the impulse response of a (point, actuator) pair that a propagation matrix needs.
+    #[error("the dataset has no impulse response for grid point {point_index}, actuator {actuator}")]
+    MissingResponse {
+        /// Grid point (flat index).
+        point_index: u32,
+        /// Actuator number.
+        actuator: u16,
+    },
+    /// A requested grid point is not among the points of the propagation matrices.
+    #[error("grid point {point_index} is not among the measured points")]
+    UnknownPoint {
+        /// Grid point (flat index).
+        point_index: u32,
+    },
+    /// No FFT bin of the impulse responses falls inside the requested band.
+    #[error(
+        "no frequency bin lies in the band {lo_hz} .. {hi_hz} Hz (bin spacing {spacing_hz} Hz, Nyquist {nyquist_hz} Hz)"
+    )]
+    EmptyBand {
+        /// Lower band edge, Hz.
+        lo_hz: f64,
+        /// Upper band edge, Hz.
+        hi_hz: f64,
+        /// Bin spacing, Hz.
+        spacing_hz: f64,
+        /// Nyquist frequency, Hz.
+        nyquist_hz: f64,
+    },
+    /// An input held NaN or an infinity.
+    #[error("{input} contains a non-finite value at index {index}")]
+    NonFinite {
+        /// Which input.
+        input: &'static str,
+        /// First offending index.
+        index: usize,
+    },
+    /// The computation overflowed to NaN or infinity although the inputs were finite.
+    #[error("{what} produced a non-finite result; the input is outside the routine's valid range")]
+    NonFiniteResult {
+        /// Which computation.
+        what: &'static str,
+    },
+    /// The linear-algebra backend failed (an SVD that did not converge).
+    #[error("{what} failed: {reason}")]
+    LinearAlgebra {
+        /// Which computation.
+        what: &'static str,
+        /// The backend's message.
+        reason: String,
+    },
+    /// Reading the dataset failed.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// A shared signal-processing helper refused its input.
+    #[error(transparent)]
+    Dsp(#[from] DspError),
+}
+
+/// The first non-finite value of `values`, as a [`ControlError::NonFinite`] naming `input`.
+pub(crate) fn check_finite(input: &'static str, values: impl IntoIterator<Item = f64>) -> Result<(), ControlError> {
+    match values.into_iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(ControlError::NonFinite { input, index }),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,104 @@
+//! Every figure renders from small synthetic data into a valid PNG and an SVG that carries its axis labels, with the
+//! bundled font only.
+
+#![allow(clippy::unwrap_used)] // helpers outside #[test] functions unwrap too: a failure is a failed test
+
+use std::path::Path;
+
+use metaplate_core::grid::GridSpec;
+use metaplate_figures::{
+    Curve, FigureError, SingularValueSeries, WavelengthSeries, Written, condition_numbers, driven_response,
+    focus_snapshots, pixel_area_map, pod_energy, singular_value_energy, wavelength,
+};
+
+const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n";
+
+/// Checks both files: PNG signature and a decodable image of non-trivial size with more than one colour (something
+/// was drawn); SVG text that opens and closes an `<svg` element and contains every expected label.
+fn check(written: &Written, labels: &[&str]) {
+    let png = std::fs::read(&written.png).unwrap();
+    assert!(png.starts_with(PNG_MAGIC), "{} is not a PNG", written.png.display());
+    let decoder = png::Decoder::new(std::io::Cursor::new(png));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert!(info.width >= 300 && info.height >= 300);
+    let first = &buf[..3];
+    assert!(buf.chunks(3).any(|px| px != first), "the PNG is a single colour");
+    let svg = std::fs::read_to_string(&written.svg).unwrap();
+    assert!(svg.contains("<svg") && svg.trim_end().ends_with("</svg>"), "{} is not an SVG", written.svg.display());
+    for label in labels {
+        assert!(svg.contains(label), "{} lacks the label {label:?}", written.svg.display());
+    }
+}
+
+fn curve(label: &str, f: impl Fn(f64) -> f64, xs: impl Iterator<Item = f64>) -> Curve {
+    Curve { label: label.to_owned(), points: xs.map(|x| (x, f(x))).collect() }
+}
+
+#[test]
+fn line_figures_render_to_png_and_svg() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let freqs: Vec<f64> = (0..10).map(|i| 75.0 + 50.0 * i as f64).collect();
+    let wl = WavelengthSeries {
+        label: "metamaterial".into(),
+        median_m: freqs.iter().map(|f| 0.1 * (75.0 / f).sqrt()).collect(),
+        iqr_m: freqs.iter().map(|f| (0.09 * (75.0 / f).sqrt(), 0.11 * (75.0 / f).sqrt())).collect(),
+        freqs_hz: freqs.clone(),
+    };
+    check(&wavelength(d, "wavelength", &[wl]).unwrap(), &["frequency (Hz)", "wavelength (cm)", "metamaterial"]);
+
+    let pod = [
+        curve("metamaterial", |n| 0.5f64.powf(n), (1..=30).map(f64::from)),
+        curve("homogeneous", |n| 0.3f64.powf(n), (1..=30).map(f64::from)),
+    ];
+    check(&pod_energy(d, "pod", &pod).unwrap(), &["component", "normalised energy", "cumulative energy (%)"]);
+
+    let sv = SingularValueSeries {
+        label: "3.5 cm".into(),
+        mean_db: (0..8).map(|i| -4.0 * i as f64).collect(),
+        std_db: vec![2.0; 8],
+    };
+    check(&singular_value_energy(d, "sv", &[sv]).unwrap(), &["singular value index", "3.5 cm"]);
+
+    let kappa = [curve("homogeneous", |d| 500.0 / d, [3.5, 6.5, 9.5].into_iter())];
+    check(&condition_numbers(d, "kappa", &kappa).unwrap(), &["domain edge (cm)", "condition number"]);
+
+    let response = [curve("metamaterial", |f| 1e-3 / f, freqs.iter().copied())];
+    check(&driven_response(d, "response", &response).unwrap(), &["frequency (Hz)", "mean |G|"]);
+}
+
+#[test]
+fn map_figures_render_to_png_and_svg() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = GridSpec::centred(9, 5, 0.005);
+    let field = |t: f64| -> Vec<Option<f64>> {
+        (0..grid.len())
+            .map(|i| {
+                let (x, y) = grid.position_m(i);
+                (i != 0).then(|| (-(x * x + y * y) / 1e-4).exp() * (t + 100.0 * x).cos())
+            })
+            .collect()
+    };
+    let snaps = vec![("t = -1 ms".to_owned(), field(-1.0)), ("t = 0".to_owned(), field(0.0))];
+    check(&focus_snapshots(dir.path(), "focus", &grid, &snaps).unwrap(), &["x (cm)", "y (cm)", "t = 0"]);
+
+    let area: Vec<Option<f64>> = (0..grid.len()).map(|i| (i % 7 != 0).then_some(1.0 + i as f64 / 10.0)).collect();
+    check(
+        &pixel_area_map(dir.path(), "area", &grid, &area, "median 2.7 cm^2").unwrap(),
+        &["x (cm)", "pixel area (cm^2)", "median 2.7 cm^2"],
+    );
+}
+
+#[test]
+fn unplottable_data_is_a_typed_error() {
+    let d = Path::new("/nonexistent-never-written");
+    assert!(matches!(pod_energy(d, "x", &[]), Err(FigureError::InvalidData { .. })));
+    let nan = [Curve { label: "nan".into(), points: vec![(f64::NAN, 1.0), (1.0, f64::INFINITY)] }];
+    assert!(matches!(condition_numbers(d, "x", &nan), Err(FigureError::Draw { .. })));
+    let grid = GridSpec::centred(3, 3, 0.005);
+    assert!(matches!(pixel_area_map(d, "x", &grid, &[None; 9], "t"), Err(FigureError::InvalidData { .. })));
+    assert!(matches!(pixel_area_map(d, "x", &grid, &[Some(1.0); 4], "t"), Err(FigureError::InvalidData { .. })));
+    assert!(matches!(focus_snapshots(d, "x", &grid, &[]), Err(FigureError::InvalidData { .. })));
+}
