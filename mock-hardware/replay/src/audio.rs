@@ -163,7 +163,7 @@ impl<S: PcmSink, W: Write + Send> PcmSink for RecordingSink<S, W> {
 
 /// One recorded call of a PCM sink.
 #[derive(Debug, Clone, PartialEq)]
-enum AudioStep {
+pub(crate) enum AudioStep {
     Open { record: usize, wanted: PcmParams, result: Result<PcmParams, Failure> },
     Submit { record: usize, samples: Vec<f32>, result: Result<(), Failure> },
     Wait { record: usize, result: Result<PcmStatus, Failure> },
@@ -207,7 +207,7 @@ fn parse_played(text: &str) -> Option<PcmStatus> {
     Some(PcmStatus { frames_played, underruns })
 }
 
-fn audio_steps(records: &[Record]) -> (Vec<AudioStep>, usize) {
+pub(crate) fn audio_steps(records: &[Record]) -> (Vec<AudioStep>, usize) {
     let mut steps = Vec::new();
     let mut ignored = 0;
     let mut i = 0;

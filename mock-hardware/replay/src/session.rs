@@ -16,6 +16,10 @@ use metaplate_ldv_protocol::{Command, CommandDecoder};
 use metaplate_mock_daq::{FaultSchedule as DaqFaults, MockDaq, MockTransport, usb6211_info};
 use metaplate_mock_ldv::{FaultSchedule as LdvFaults, MockController, MockDevice, MockLine};
 
+use metaplate_audio::AudioDriver;
+use metaplate_core::audio::{AudioConfig, AudioOut};
+
+use crate::audio::{AudioStep, ReplaySink, audio_steps};
 use crate::bulk::{RecordingTransport, ReplayTransport};
 use crate::engine::{Mismatch, ReplayStats};
 use crate::faults::ReplayFaults;
@@ -72,17 +76,66 @@ impl SessionReport {
     }
 }
 
-/// Replays `cassette` through the driver of its device kind (LDV or DAQ).
+/// Replays `cassette` through the driver of its device kind (LDV, DAQ or audio interface).
 ///
 /// # Errors
-/// [`ReplayError::WrongDevice`] for an audio or HID cassette: those sessions are not driven from recorded
-/// commands (use [`crate::ReplaySink`] under the audio driver directly).
+/// [`ReplayError::WrongDevice`] for a HID cassette (the keypad is read, not driven by commands).
 pub fn replay(cassette: &Cassette, faults: ReplayFaults) -> Result<SessionReport, ReplayError> {
     match cassette.header.device_kind {
         DeviceKind::LdvSerial => replay_ldv(cassette, faults),
         DeviceKind::DaqUsb => replay_daq(cassette, faults),
+        DeviceKind::Audio => replay_audio(cassette, faults),
         found => Err(ReplayError::WrongDevice { expected: DeviceKind::LdvSerial, found }),
     }
+}
+
+/// Replays an audio session: a fresh [`AudioDriver`] over a [`ReplaySink`], one `configure` per recorded open,
+/// one `start` per recorded buffer (de-interleaved back into channels: exact, f32 to f64 and back), one `finish`
+/// per recorded wait. Stops at a mismatch.
+///
+/// # Errors
+/// [`ReplayError::WrongDevice`] unless it is an audio cassette.
+pub fn replay_audio(cassette: &Cassette, faults: ReplayFaults) -> Result<SessionReport, ReplayError> {
+    let (steps, _) = audio_steps(&cassette.records);
+    let mut driver = AudioDriver::new(ReplaySink::new(cassette, faults)?);
+    let mut channels = 1usize;
+    let mut calls = Vec::new();
+    for step in &steps {
+        let (call, result) = match step {
+            AudioStep::Open { wanted, .. } => {
+                channels = (wanted.channels as usize).max(1);
+                let config = AudioConfig { sample_rate_hz: wanted.sample_rate_hz, channels: wanted.channels };
+                ("configure", driver.configure(&config).map(|()| "ok".to_string()))
+            }
+            AudioStep::Submit { samples, .. } => {
+                let buffers: Vec<Vec<f64>> = (0..channels)
+                    .map(|c| samples.iter().skip(c).step_by(channels).map(|&x| f64::from(x)).collect())
+                    .collect();
+                let frames = buffers.first().map_or(0, Vec::len);
+                ("start", driver.start(&buffers).map(|()| format!("{frames} frames")))
+            }
+            AudioStep::Wait { .. } => {
+                ("finish", driver.finish().map(|r| format!("{} frames, {} underruns", r.frames_played, r.underruns)))
+            }
+            // The driver closes only to reopen; a recorded close needs no call of its own.
+            AudioStep::Close { .. } => continue,
+        };
+        calls.push(CallOutcome { call: call.into(), result: result.map_err(|e| e.to_string()) });
+        if driver.sink().mismatch().is_some() {
+            break;
+        }
+    }
+    let sink = driver.sink();
+    Ok(SessionReport {
+        device: DeviceKind::Audio,
+        records: cassette.records.len(),
+        calls,
+        blocks: Vec::new(),
+        retries: 0,
+        stats: sink.stats().clone(),
+        mismatch: sink.mismatch().cloned(),
+        finished: sink.is_finished(),
+    })
 }
 
 /// The recorded host writes, in order.

@@ -131,3 +131,56 @@ fn an_injected_wait_fault_is_the_sinks_typed_error() {
     assert_eq!(results[..4], recorded[..4]);
     assert_eq!(results[5..], recorded[5..]);
 }
+
+/// A session through the audio driver itself (what a recipe does), recorded.
+fn record_driver_session() -> (Cassette, Vec<String>) {
+    use metaplate_audio::AudioDriver;
+    use metaplate_core::audio::{AudioConfig, AudioOut};
+    let header = Header { device_kind: DeviceKind::Audio, identity: DeviceIdentity::default(), start_unix_ns: 0 };
+    let recorder = Recorder::start(Vec::new(), &header, Arc::new(VirtualClock::new())).unwrap();
+    let mut driver = AudioDriver::new(RecordingSink::new(FakeSink::default(), recorder.clone()));
+    let config = AudioConfig { sample_rate_hz: 48_000.0, channels: 3 };
+    let tone = |scale: f64| -> Vec<Vec<f64>> {
+        (0..3).map(|c| (0..480).map(|i| scale * ((i * (c + 1)) as f64 * 0.01).sin()).collect()).collect()
+    };
+    let results = vec![
+        format!("{:?}", driver.configure(&config)),
+        format!("{:?}", driver.start(&tone(0.5))),
+        format!("{:?}", driver.finish()),
+        format!("{:?}", driver.start(&tone(0.25))),
+        format!("{:?}", driver.finish()),
+    ];
+    recorder.finish().unwrap();
+    let bytes = recorder.with_writer(|w| w.clone()).unwrap();
+    (Cassette::from_bytes(&bytes).unwrap(), results)
+}
+
+#[test]
+fn a_driver_session_replays_through_the_driver() {
+    let (cassette, recorded) = record_driver_session();
+    let report = metaplate_replay::session::replay(&cassette, ReplayFaults::none()).unwrap();
+    assert!(report.mismatch.is_none(), "{:?}", report.mismatch);
+    assert!(report.finished);
+    let calls: Vec<&str> = report.calls.iter().map(|c| c.call.as_str()).collect();
+    assert_eq!(calls, ["configure", "start", "finish", "start", "finish"]);
+    assert!(recorded.iter().all(|r| r.starts_with("Ok")), "{recorded:?}");
+    assert!(report.calls.iter().all(|c| c.result.is_ok()), "{:?}", report.calls);
+    assert_eq!(report.calls[2].result.as_deref(), Ok("480 frames, 0 underruns"));
+    // A disconnect injected at the first wait's record: the driver's finish reports it, typed.
+    let wait_record = wait_record_index(&cassette);
+    let faulted =
+        metaplate_replay::session::replay(&cassette, ReplayFaults::none().with(wait_record, FaultKind::Disconnect))
+            .unwrap();
+    let finish = &faulted.calls[2];
+    assert_eq!(finish.call, "finish");
+    assert!(finish.result.as_ref().unwrap_err().contains("disconnected"), "{finish:?}");
+}
+
+/// The record index of the first `played` note (the first wait's result).
+fn wait_record_index(cassette: &Cassette) -> usize {
+    cassette
+        .records
+        .iter()
+        .position(|r| matches!(&r.body, Body::Event(metaplate_cassette::Event::Note(t)) if t.starts_with("played")))
+        .unwrap()
+}
