@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 mod analyze;
 mod deconvolve;
 mod demo;
+mod focus;
 mod progress;
 mod replay;
 mod scene;
@@ -35,6 +36,8 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Deconvolve a recorded WAV by its excitation (or by a loopback channel) into impulse responses.
     Deconvolve(deconvolve::DeconvolveArgs),
+    /// Drive signals that focus target waveforms on virtual pixels (multichannel WAV), from a dataset.
+    Focus(focus::FocusArgs),
     /// Write an excitation sweep (the paper's by default) as a 32-bit float WAV file.
     Sweep(sweep::SweepArgs),
     /// List the built-in scenes, or show one (or a scene file) fully resolved.
@@ -55,6 +58,7 @@ fn main() -> anyhow::Result<()> {
         Command::Analyze(args) => analyze::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Deconvolve(args) => deconvolve::run(&args),
+        Command::Focus(args) => focus::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Replay(args) => replay::run(&args),

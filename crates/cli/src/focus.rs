@@ -1,0 +1,298 @@
+//! `metaplate focus`: drive signals that focus target waveforms on virtual pixels, from a measured (or simulated)
+//! dataset, written as a multichannel WAV file; optionally the predicted field at the pixels.
+//!
+//! Pixels are given in metres on the plate and snap to the nearest measured point. The drives are solved by the
+//! paper's spatiotemporal inverse filter (or time reversal) over the operating band, bin by bin.
+//!
+//! One-shot playback: the frequency-domain model is circular, so a drive one impulse-response long is exact only when
+//! played in a loop. By default the impulse responses are zero-padded by their own length (`--pad-s`), so the
+//! period is twice the response and the default focus time is half-way: the drive that builds the focus fits
+//! before it and the plate's ring-down after it, and a single playback (preceded and followed by silence) gives the
+//! predicted field up to the part of the responses that outlasts the padding. `--pad-s 0` writes one period for
+//! looped playback.
+//!
+//! Calibration (provisional, until the calibration recipe's dataset format exists): `--calibration DIR` reads
+//! `DIR/kirkeby.wav`, one channel per actuator in the dataset's actuator order, each channel the taps of that
+//! actuator's Kirkeby inverse filter at the dataset's sample rate. The drives are convolved with them (each channel
+//! grows by the filter length minus one); the predicted field is that of the uncompensated drives, since the
+//! Green's functions were measured through the calibrated actuators.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, bail};
+use clap::Args;
+use metaplate_control::PropagationMatrices;
+use metaplate_control::render::{FocusOptions, compensate, normalise_peak, predicted_field, solve_drives};
+use metaplate_control::solve::{Method, Regularisation};
+use metaplate_control::target::{PixelTarget, Waveform};
+use metaplate_core::grid::GridSpec;
+use metaplate_core::scene::Scene;
+use metaplate_dsp::kirkeby::KirkebyFilter;
+use metaplate_store::Dataset;
+use serde_json::json;
+
+use crate::wav;
+
+/// Arguments of `metaplate focus`.
+#[derive(Args)]
+pub struct FocusArgs {
+    /// Dataset directory (a scan or `metaplate simulate greens`).
+    #[arg(long)]
+    data: PathBuf,
+    /// Calibration directory holding `kirkeby.wav` (one channel of inverse-filter taps per actuator; provisional).
+    #[arg(long)]
+    calibration: Option<PathBuf>,
+    /// A pixel: `X_M,Y_M` in metres, optionally `:TARGET` with TARGET one of `impulse[@T]`, `impulses@T1,T2,..`,
+    /// `noise@START,DURATION[,SEED]`, `sine@FREQ[,START,DURATION]`, `wavelets@FREQ,CYCLES,T1,..`, `null` (times
+    /// in s from the start of the drive, frequencies in Hz). Default target: an impulse at the focus time.
+    /// Repeat for several pixels.
+    #[arg(long = "pixel", required = true, allow_hyphen_values = true)]
+    pixels: Vec<String>,
+    /// Output WAV file: 32-bit float, one channel per actuator, peak-normalised to 1.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write the predicted field v(x, t) at the pixels: CSV when the name ends in `.csv`, JSON otherwise.
+    #[arg(long)]
+    field: Option<PathBuf>,
+    /// With --field, write the field at every measured point too (large: points x samples).
+    #[arg(long)]
+    field_all_points: bool,
+    /// Lower edge of the operating band, Hz.
+    #[arg(long, default_value_t = 75.0)]
+    band_lo_hz: f64,
+    /// Upper edge of the operating band, Hz.
+    #[arg(long, default_value_t = 400.0)]
+    band_hi_hz: f64,
+    /// Tikhonov regularisation relative to the largest singular value at each frequency.
+    #[arg(long, default_value_t = 0.01)]
+    alpha_relative: f64,
+    /// Time reversal instead of inverse filtering.
+    #[arg(long)]
+    time_reversal: bool,
+    /// Zero padding of the impulse responses, s (default: their own length, for one-shot playback; 0: one period
+    /// for looped playback).
+    #[arg(long)]
+    pad_s: Option<f64>,
+    /// Focus time of plain `impulse` targets, s from the start of the drive (default: half the period).
+    #[arg(long)]
+    focus_s: Option<f64>,
+}
+
+/// A parsed `--pixel`: position in metres and its waveform text.
+struct PixelSpec {
+    x_m: f64,
+    y_m: f64,
+    target: String,
+}
+
+fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
+    let (position, target) = text.split_once(':').unwrap_or((text, "impulse"));
+    let Some((x, y)) = position.split_once(',') else { bail!("--pixel `{text}`: expected X_M,Y_M[:TARGET]") };
+    let number = |s: &str| s.trim().parse::<f64>().with_context(|| format!("--pixel `{text}`: `{s}` is not a number"));
+    let (x_m, y_m) = (number(x)?, number(y)?);
+    if !(x_m.is_finite() && y_m.is_finite()) {
+        bail!("--pixel `{text}`: coordinates must be finite");
+    }
+    Ok(PixelSpec { x_m, y_m, target: target.trim().to_owned() })
+}
+
+/// The plate's outline test: the built-in scene's outline when the dataset was made on an unchanged built-in scene
+/// (same name and content hash), else the grid's bounds widened by half a spacing.
+fn on_plate(dataset: &Dataset) -> impl Fn(f64, f64) -> bool {
+    let meta = &dataset.manifest().meta;
+    let scene = Scene::builtin(&meta.scene.name)
+        .ok()
+        .filter(|s| format!("{:016x}", s.content_hash()).eq_ignore_ascii_case(&meta.scene.hash));
+    let grid = meta.grid;
+    move |x_m, y_m| match &scene {
+        Some(scene) => scene.plate.outline.contains(x_m, y_m),
+        None => {
+            let h = grid.spacing_m / 2.0;
+            let (x1, y1) = grid.position_m(grid.index(grid.nx - 1, grid.ny - 1));
+            (grid.origin_x_m - h..=x1 + h).contains(&x_m) && (grid.origin_y_m - h..=y1 + h).contains(&y_m)
+        }
+    }
+}
+
+/// Spacing of the measured points along one axis: the smallest positive gap between their coordinates, or the
+/// grid's spacing when all share one coordinate.
+fn lattice_step_m(coords: impl Iterator<Item = f64>, grid: &GridSpec) -> f64 {
+    let mut c: Vec<f64> = coords.collect();
+    c.sort_unstable_by(f64::total_cmp);
+    // Gaps below a micrometre are the same grid column (rounding of the positions).
+    let step = c.windows(2).map(|w| w[1] - w[0]).filter(|&d| d > 1e-6).fold(f64::INFINITY, f64::min);
+    if step.is_finite() { step } else { grid.spacing_m }
+}
+
+/// Snaps a pixel to the nearest measured point (grid flat index), or explains why it cannot.
+fn snap(dataset: &Dataset, spec: &PixelSpec, on_plate: &impl Fn(f64, f64) -> bool) -> anyhow::Result<u32> {
+    let (x, y) = (spec.x_m, spec.y_m);
+    if !on_plate(x, y) {
+        bail!("pixel ({x}, {y}) is off the plate");
+    }
+    let grid = dataset.manifest().meta.grid;
+    let positions: Vec<(u32, (f64, f64))> =
+        dataset.points().iter().map(|&p| (p, grid.position_m(p as usize))).collect();
+    let step_x = lattice_step_m(positions.iter().map(|p| p.1.0), &grid);
+    let step_y = lattice_step_m(positions.iter().map(|p| p.1.1), &grid);
+    let Some(&(point, (px, py))) = positions.iter().min_by(|a, b| dist2(a.1, (x, y)).total_cmp(&dist2(b.1, (x, y))))
+    else {
+        bail!("the dataset has no measured points");
+    };
+    // Half a step of the measured lattice each way, with a little slack for coordinates typed in decimal.
+    let slack = 1.0 + 1e-9;
+    if (px - x).abs() > step_x / 2.0 * slack || (py - y).abs() > step_y / 2.0 * slack {
+        bail!(
+            "pixel ({x}, {y}) is {:.1} mm from the nearest measured point ({px:.4}, {py:.4}), more than half the \
+             measured spacing ({:.1} x {:.1} mm): it lies in a gap of the scan (a support or a masked point)",
+            dist2((px, py), (x, y)).sqrt() * 1e3,
+            step_x * 1e3,
+            step_y * 1e3
+        );
+    }
+    Ok(point)
+}
+
+fn dist2(a: (f64, f64), b: (f64, f64)) -> f64 {
+    (a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)
+}
+
+/// Reads the provisional calibration: `DIR/kirkeby.wav`, one channel of taps per actuator.
+fn read_calibration(dir: &Path, n_actuators: usize, sample_rate_hz: f64) -> anyhow::Result<Vec<KirkebyFilter>> {
+    let path = dir.join("kirkeby.wav");
+    let (rate_hz, channels) = wav::read(&path)?;
+    if channels.len() != n_actuators {
+        bail!("{} has {} channels, the dataset {n_actuators} actuators", path.display(), channels.len());
+    }
+    if (rate_hz - sample_rate_hz).abs() > 1e-9 * sample_rate_hz {
+        bail!("{} is at {rate_hz} Hz, the dataset at {sample_rate_hz} Hz", path.display());
+    }
+    Ok(channels
+        .into_iter()
+        .map(|taps| KirkebyFilter { taps, sample_rate_hz, modelling_delay_samples: 0, max_boost_db: 0.0 })
+        .collect())
+}
+
+/// Runs `metaplate focus`.
+pub fn run(args: &FocusArgs) -> anyhow::Result<()> {
+    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
+    let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<anyhow::Result<_>>()?;
+    let on_plate = on_plate(&dataset);
+    let points: Vec<u32> = specs.iter().map(|s| snap(&dataset, s, &on_plate)).collect::<anyhow::Result<_>>()?;
+
+    let fs = dataset.sample_rate_hz();
+    let ir_len = dataset.ir_len();
+    let pad_s = args.pad_s.unwrap_or(ir_len as f64 / fs);
+    if !(pad_s.is_finite() && pad_s >= 0.0) {
+        bail!("--pad-s must be finite and >= 0, got {pad_s}");
+    }
+    let fft_len = ir_len + (pad_s * fs).round() as usize;
+    let band = (args.band_lo_hz, args.band_hi_hz);
+    let g = PropagationMatrices::from_dataset_padded(&dataset, band, None, fft_len).context("building G(omega)")?;
+    let period_s = fft_len as f64 / fs;
+    let focus_s = args.focus_s.unwrap_or(period_s / 2.0);
+
+    let targets: Vec<PixelTarget> = specs
+        .iter()
+        .zip(&points)
+        .map(|(spec, &point_index)| {
+            let waveform = if spec.target == "impulse" {
+                Waveform::Impulse { time_s: focus_s }
+            } else {
+                spec.target.parse::<Waveform>()?
+            };
+            Ok(PixelTarget { point_index, waveform, amplitude: 1.0 })
+        })
+        .collect::<Result<_, metaplate_control::ControlError>>()?;
+    let method = if args.time_reversal { Method::TimeReversal } else { Method::InverseFilter };
+    let options = FocusOptions {
+        regularisation: Regularisation::Relative(args.alpha_relative),
+        method,
+        ..FocusOptions::default()
+    };
+    let drives = solve_drives(&g, &targets, &options).context("solving the drives")?;
+    let mut signals = drives.signals(&g)?;
+    if let Some(dir) = &args.calibration {
+        let filters = read_calibration(dir, g.n_actuators(), fs)?;
+        signals = compensate(&signals, &filters)?;
+    }
+    let (peak, factor) = normalise_peak(&mut signals, 1.0)?;
+    wav::write_f32(&args.out, fs, &signals)?;
+    println!(
+        "wrote {}: {} channels x {} samples at {fs} Hz ({:.3} s; focus time {focus_s:.4} s; {})",
+        args.out.display(),
+        signals.len(),
+        signals.first().map_or(0, Vec::len),
+        signals.first().map_or(0, Vec::len) as f64 / fs,
+        if pad_s > 0.0 { "for one-shot playback" } else { "one period, loop it" }
+    );
+    println!("peak drive {peak:.6e} (dataset drive units), normalisation factor {factor:.6e}");
+    if factor == 0.0 {
+        println!("every target is null: the drives are silent");
+    }
+    if let Some(path) = &args.field {
+        let rows: Vec<usize> = points
+            .iter()
+            .map(|&p| g.row_of(p).context("internal: pixel not among the rows"))
+            .collect::<Result<_, _>>()?;
+        let at_pixels = predicted_field(&g, &drives, Some(&rows), factor)?;
+        let everywhere = if args.field_all_points { Some(predicted_field(&g, &drives, None, factor)?) } else { None };
+        write_field(path, fs, &specs, &points, &at_pixels, g.points(), everywhere.as_deref())?;
+        println!("wrote the predicted field to {}", path.display());
+    }
+    Ok(())
+}
+
+/// Writes the predicted field: CSV (`t_s` then one column per pixel, then per point with --field-all-points) when
+/// `path` ends in `.csv`, else JSON `{"sample_rate_hz", "pixels": [{"x_m", "y_m", "point_index", "target", "v"}],
+/// "points": [{"point_index", "v"}]}`; velocities in the dataset's units per unit drive, times the normalisation.
+fn write_field(
+    path: &Path,
+    fs: f64,
+    specs: &[PixelSpec],
+    points: &[u32],
+    at_pixels: &[Vec<f64>],
+    all_points: &[u32],
+    everywhere: Option<&[Vec<f64>]>,
+) -> anyhow::Result<()> {
+    let is_csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let text = if is_csv {
+        let mut columns: Vec<(String, &[f64])> = specs
+            .iter()
+            .zip(points)
+            .zip(at_pixels)
+            .map(|((s, p), v)| (format!("pixel_{p}_{}_{}", s.x_m, s.y_m), v.as_slice()))
+            .collect();
+        if let Some(all) = everywhere {
+            columns.extend(all_points.iter().zip(all).map(|(p, v)| (format!("point_{p}"), v.as_slice())));
+        }
+        let mut out = String::from("t_s");
+        for (name, _) in &columns {
+            let _ = write!(out, ",{name}");
+        }
+        out.push('\n');
+        let len = columns.first().map_or(0, |c| c.1.len());
+        for i in 0..len {
+            let _ = write!(out, "{}", i as f64 / fs);
+            for (_, v) in &columns {
+                let _ = write!(out, ",{:e}", v[i]);
+            }
+            out.push('\n');
+        }
+        out
+    } else {
+        let pixels: Vec<_> = specs
+            .iter()
+            .zip(points)
+            .zip(at_pixels)
+            .map(|((s, p), v)| json!({"x_m": s.x_m, "y_m": s.y_m, "point_index": p, "target": s.target, "v": v}))
+            .collect();
+        let mut doc = json!({"sample_rate_hz": fs, "pixels": pixels});
+        if let Some(all) = everywhere {
+            doc["points"] = all_points.iter().zip(all).map(|(p, v)| json!({"point_index": p, "v": v})).collect();
+        }
+        serde_json::to_string(&doc)?
+    };
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}

@@ -1,0 +1,98 @@
+//! `PropagationMatrices::from_dataset` against a direct FFT of the stored impulse responses.
+
+#![allow(clippy::unwrap_used)] // tests may unwrap
+
+use metaplate_control::{ControlError, PropagationMatrices};
+use metaplate_dsp::fft;
+use metaplate_store::{Dataset, DatasetMeta, DatasetWriter, GridSpec, IfExists, IrMeta, IrRecord, SceneId};
+
+const IR_LEN: usize = 64;
+const FS_HZ: f64 = 24_000.0;
+
+/// A deterministic impulse response per (point, actuator): a decaying sum of two tones with a key-dependent phase.
+fn ir(point: u32, actuator: u16) -> Vec<f32> {
+    (0..IR_LEN)
+        .map(|i| {
+            let t = i as f64 / FS_HZ;
+            let phase = f64::from(point) * 0.7 + f64::from(actuator) * 1.3;
+            ((-t * 900.0).exp() * ((6283.0 * t + phase).sin() + 0.5 * (21000.0 * t - phase).cos())) as f32
+        })
+        .collect()
+}
+
+/// A 4 x 3 grid with three points measured by three actuators (0, 2, 5), written in two batches.
+fn write_dataset(dir: &std::path::Path) -> Dataset {
+    let grid = GridSpec { nx: 4, ny: 3, spacing_m: 0.005, origin_x_m: 0.0, origin_y_m: 0.0 };
+    let meta = DatasetMeta::new(
+        "test",
+        serde_json::Map::new(),
+        SceneId { name: "none".into(), hash: "0".into() },
+        "0",
+        1,
+        grid,
+    );
+    let mut writer = DatasetWriter::create(dir, meta, IfExists::Refuse).unwrap();
+    for batch in [&[(0, 0), (3, 1)][..], &[(1, 2)][..]] {
+        let mut records = Vec::new();
+        for &(ix, iy) in batch {
+            for actuator in [0, 2, 5] {
+                let meta = IrMeta::at_grid(&grid, ix, iy, actuator, FS_HZ).unwrap();
+                records.push(IrRecord { ir: ir(meta.point_index, actuator), meta });
+            }
+        }
+        writer.commit_batch(&records).unwrap();
+    }
+    writer.finish().unwrap();
+    Dataset::open(dir).unwrap()
+}
+
+#[test]
+fn g_matches_a_direct_fft_of_every_response() {
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = write_dataset(dir.path());
+    // 24 kHz / 64 = 375 Hz bins: the band 1000 .. 5000 Hz holds bins 3 to 13.
+    for fft_len in [IR_LEN, 100] {
+        let g = PropagationMatrices::from_dataset_padded(&dataset, (1000.0, 5000.0), None, fft_len).unwrap();
+        assert_eq!(g.points(), [0, 7, 9]);
+        assert_eq!(g.actuators(), [0, 2, 5]);
+        assert_eq!(g.fft_len(), fft_len);
+        let first = (1000.0 * fft_len as f64 / FS_HZ).ceil() as usize;
+        assert_eq!(g.bins().start, first);
+        for k in 0..g.n_bins() {
+            let gk = g.at_bin(k).unwrap();
+            for (m, &p) in g.points().iter().enumerate() {
+                for (n, &a) in g.actuators().iter().enumerate() {
+                    let x: Vec<f64> = ir(p, a).iter().map(|&v| f64::from(v)).collect();
+                    let want = fft::forward(&x, fft_len).unwrap()[g.bins().start + k];
+                    // Same FFT on the same f64 samples (the f32 widening is exact): agreement to rounding, 1e-12 of
+                    // a response whose spectrum is O(1) to O(10).
+                    assert!((gk[(m, n)] - want).norm() < 1e-12, "bin {k}, point {p}, actuator {a}");
+                }
+            }
+        }
+    }
+    // A point subset, in the order asked, duplicates kept.
+    let g = PropagationMatrices::from_dataset(&dataset, (1000.0, 5000.0), Some(&[9, 0, 9])).unwrap();
+    assert_eq!(g.points(), [9, 0, 9]);
+    assert_eq!(g.at_bin(0).unwrap()[(0, 1)], g.at_bin(0).unwrap()[(2, 1)]);
+}
+
+#[test]
+fn missing_points_short_ffts_and_empty_bands_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = write_dataset(dir.path());
+    let band = (1000.0, 5000.0);
+    assert!(matches!(
+        PropagationMatrices::from_dataset(&dataset, band, Some(&[1])),
+        Err(ControlError::UnknownPoint { point_index: 1 })
+    ));
+    assert!(matches!(
+        PropagationMatrices::from_dataset_padded(&dataset, band, None, IR_LEN - 1),
+        Err(ControlError::InvalidParameter { name: "fft_len", .. })
+    ));
+    // Between two bins (375 and 750 Hz): no bin in the band.
+    assert!(matches!(
+        PropagationMatrices::from_dataset(&dataset, (400.0, 700.0), None),
+        Err(ControlError::EmptyBand { .. })
+    ));
+}
