@@ -90,6 +90,9 @@ struct Scheduled {
     point_k: Option<usize>,
     /// A random dropout: (start, end) virtual time, s.
     dropout_s: Option<(f64, f64)>,
+    /// Time from the playback's start to the end of its last non-silent frame, s: the plate answers nothing to
+    /// silence, so its response ends one ring-down after this, not after the playback's silent tail.
+    sounding_s: f64,
     /// Rendered for the DAQ acquisition `run` (its id): first DAQ sample index, velocity (m/s), loopback (V).
     rendered: Option<Rendered>,
     /// Plate velocity on the half-rate audio grid, m/s, once computed (an acquisition that starts during the
@@ -221,11 +224,14 @@ impl LabState {
                 ldv.controller_mut().start_dropout(1);
             }
         }
+        let channels = playback.channels.max(1) as usize;
+        let sounding_frames = playback.samples.iter().rposition(|v| *v != 0.0).map_or(0, |i| i / channels + 1);
         self.playbacks.push(Scheduled {
             playback: playback.clone(),
             key,
             point_k,
             dropout_s,
+            sounding_s: sounding_frames as f64 / playback.frame_rate_hz,
             rendered: None,
             grid_velocity: None,
         });
@@ -250,15 +256,24 @@ impl LabState {
 
     /// Renders playback `k` onto the DAQ samples of `run`.
     fn render(&mut self, k: usize, run: DaqRun, fd_hz: f64) -> Result<(), LabError> {
-        let (start_s, end_s, fa_hz, point_k) = {
+        let (start_s, sounding_s, fa_hz, point_k) = {
             let s = &self.playbacks[k];
-            (s.playback.start_s, s.playback.end_s(), s.playback.frame_rate_hz, s.point_k)
+            (s.playback.start_s, s.sounding_s, s.playback.frame_rate_hz, s.point_k)
         };
         // The DAQ samples the playback reaches: from just before it (the interpolator's reach) to the end of the
-        // plate's ring-down.
+        // plate's ring-down after its last sound. Rendering no further keeps the rounding noise of the FFT
+        // convolution (some -110 dB) out of the next acquisition, which would otherwise see it or not depending on
+        // whether this playback happened in the same session.
         let ring_s = self.plate.greens.ir_len as f64 / self.plate.greens.sample_rate_hz;
-        let first_f = ((start_s - run.t0_s) * fd_hz - 32.0).ceil().max(0.0);
-        let last_f = ((end_s + ring_s - run.t0_s) * fd_hz).floor();
+        // The playback's start relative to the acquisition, rounded to 10 ns. Both instants are sums of many clock
+        // steps whose rounding (about 1e-14 s after minutes, 1e-10 s after days) depends on how long the session
+        // has run; through the DAQ's 16-bit quantiser that would flip a few bits of a measurement depending on its
+        // history. Rounded, a measurement renders the same bits whether it is the first of a session or the
+        // thousandth, so a resumed scan equals an uninterrupted one. The shift is common to velocity and loopback,
+        // so the reference deconvolution does not see it.
+        let offset_s = ((start_s - run.t0_s) * 1e8).round() / 1e8;
+        let first_f = (offset_s * fd_hz - 32.0).ceil().max(0.0);
+        let last_f = ((offset_s + sounding_s + ring_s) * fd_hz).floor();
         if last_f < first_f {
             // Over before this acquisition started: nothing to compute.
             self.playbacks[k].rendered =
@@ -270,7 +285,7 @@ impl LabState {
         let grid_hz = fa_hz / 2.0;
         let first = first_f as u64;
         let len = (last_f - first_f) as usize + 1;
-        let pos0 = ((run.t0_s + first_f / fd_hz) - start_s) * grid_hz;
+        let pos0 = (first_f / fd_hz - offset_s) * grid_hz;
         let step = grid_hz / fd_hz;
         let mut velocity_m_s = vec![0.0; len];
         if let Some(point_k) = point_k
