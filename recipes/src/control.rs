@@ -1,23 +1,36 @@
 //! How a caller steers a running recipe (stop requests, a test hook) and what the recipe tells it (events).
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU8, AtomicU64, AtomicUsize, Ordering};
 
 /// Shared stop state of a run: the CLI's Ctrl-C handler raises it, the recipe reads it between steps.
 ///
 /// Level 0: run. Level 1 (first Ctrl-C): finish the point in flight, commit it, stop. Level 2 (second Ctrl-C):
 /// abandon the point in flight (nothing of it is committed) and stop. Commits themselves are never interrupted,
 /// so neither level can corrupt the dataset.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct RunControl {
     level: Arc<AtomicU8>,
     stop_after_commits: Arc<AtomicUsize>,
+    /// Test hook: bytes the dataset writer may write (`u64::MAX`: unlimited).
+    write_budget_bytes: Arc<AtomicU64>,
+}
+
+impl Default for RunControl {
+    /// As [`RunControl::new`] (a derived default would stop after the first commit and allow no writes).
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl RunControl {
     /// A control that never stops by itself.
     pub fn new() -> Self {
-        Self { level: Arc::new(AtomicU8::new(0)), stop_after_commits: Arc::new(AtomicUsize::new(usize::MAX)) }
+        Self {
+            level: Arc::new(AtomicU8::new(0)),
+            stop_after_commits: Arc::new(AtomicUsize::new(usize::MAX)),
+            write_budget_bytes: Arc::new(AtomicU64::new(u64::MAX)),
+        }
     }
 
     /// Raises the stop level by one (saturating at 2) and returns the new level: what a Ctrl-C handler calls.
@@ -45,6 +58,18 @@ impl RunControl {
     /// from 1; commits made by earlier runs of a resumed dataset do not count).
     pub fn stop_after_commits(&self, commits: usize) {
         self.stop_after_commits.store(commits, Ordering::Release);
+    }
+
+    /// Test hook: the dataset a run opens with this control may take at most `bytes` more bytes (batch files,
+    /// journal lines and manifest together); a write beyond fails as a full disk does. See
+    /// `metaplate_store::DatasetWriter::with_write_budget`.
+    pub fn limit_writes(&self, bytes: u64) {
+        self.write_budget_bytes.store(bytes, Ordering::Release);
+    }
+
+    /// The write budget set by [`RunControl::limit_writes`], bytes; `None` when unlimited.
+    pub(crate) fn write_budget_bytes(&self) -> Option<u64> {
+        Some(self.write_budget_bytes.load(Ordering::Acquire)).filter(|b| *b != u64::MAX)
     }
 
     /// Called by the recipe after each commit, with the number of commits made by this run.
@@ -101,6 +126,17 @@ pub enum Event {
         /// What is being waited for.
         detail: String,
     },
+    /// After a device recovery, a committed point was measured again and compared with its committed response.
+    ReferenceChecked {
+        /// Grid point index of the reference.
+        point: usize,
+        /// Actuator re-measured.
+        actuator: usize,
+        /// Relative error of the new response against the committed one, dB (-20 dB: 10 % in amplitude).
+        deviation_db: f64,
+        /// Above this the rig is suspect and a warning is logged, dB.
+        limit_db: f64,
+    },
     /// The run stopped early on request; everything committed is kept.
     Stopped {
         /// Units committed.
@@ -153,5 +189,15 @@ mod tests {
         assert!(!hooked.stop_requested());
         hooked.committed(3);
         assert_eq!(hooked.level(), 1);
+    }
+
+    #[test]
+    fn the_default_control_runs_unlimited() {
+        let control = RunControl::default();
+        control.committed(usize::MAX - 1);
+        assert!(!control.stop_requested(), "no stop hook by default");
+        assert_eq!(control.write_budget_bytes(), None);
+        control.limit_writes(1000);
+        assert_eq!(control.write_budget_bytes(), Some(1000));
     }
 }

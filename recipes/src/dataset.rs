@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use metaplate_store::{BATCH_DIR, DatasetMeta, DatasetWriter, IfExists, MANIFEST_FILE, SceneId};
 
+use crate::control::RunControl;
 use crate::error::RecipeError;
 
 /// The output of a run: a dataset directory and how to treat what is already there.
@@ -36,17 +37,23 @@ fn has_dataset(dir: &Path) -> bool {
     dir.join(MANIFEST_FILE).exists() || dir.join(BATCH_DIR).exists()
 }
 
-/// Opens `out` for `meta`: a fresh dataset, or with `out.resume` the previous one in the directory.
+/// Opens `out` for `meta`: a fresh dataset, or with `out.resume` the previous one in the directory; with the write
+/// budget of `control`'s test hook, if set.
 ///
 /// # Errors
 /// [`RecipeError::Store`] as the store says (a non-empty directory without `resume`, a changed configuration without
 /// `force`, corruption it cannot quarantine); [`RecipeError::Config`] for a resume the store cannot do.
-pub(crate) fn open(out: &Output, meta: DatasetMeta) -> Result<Opened, RecipeError> {
-    if out.resume && has_dataset(&out.dir) {
-        return resume(out, meta);
+pub(crate) fn open(out: &Output, meta: DatasetMeta, control: &RunControl) -> Result<Opened, RecipeError> {
+    let mut opened = if out.resume && has_dataset(&out.dir) {
+        resume(out, meta)?
+    } else {
+        let writer = DatasetWriter::create(&out.dir, meta, IfExists::Refuse)?;
+        Opened { writer, committed: BTreeSet::new(), report: None }
+    };
+    if let Some(bytes) = control.write_budget_bytes() {
+        opened.writer = opened.writer.with_write_budget(bytes);
     }
-    let writer = DatasetWriter::create(&out.dir, meta, IfExists::Refuse)?;
-    Ok(Opened { writer, committed: BTreeSet::new(), report: None })
+    Ok(opened)
 }
 
 /// Resumption through the store's journal: it verifies the configuration (refusing a change unless `force`,

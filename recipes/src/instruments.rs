@@ -6,12 +6,23 @@ use metaplate_core::daq::{DaqChannel, DaqConfig, DaqError};
 use metaplate_core::rig::Rig;
 use metaplate_core::vibrometer::{VelocityScale, VibrometerError};
 
+use metaplate_dsp::deconv::DeconvConfig;
+use metaplate_dsp::kirkeby::KirkebyFilter;
+use metaplate_dsp::pipeline::{PreparedLayout, RepetitionLayout};
+use metaplate_store::{Dataset, Status, StoreError};
+
+use crate::calibrate::{Calibration, record_samples};
 use crate::control::{Event, Observer, RunControl};
+use crate::dataset::Output;
 use crate::error::RecipeError;
+use crate::quality::relative_error_db;
+use crate::scan::{ScanConfig, ScanPlan, ScanProtocol};
+use crate::signals::{Playback, excitation};
 
 /// How long and how often a recipe waits for a device that went away.
 ///
-/// Valid range: finite `poll_interval_s > 0`, finite `pause_after_s >= 0`.
+/// Valid range: finite `poll_interval_s > 0`, finite `pause_after_s >= 0`, `reference_limit_db` finite (or
+/// infinite to never warn).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RecoveryPolicy {
     /// Seconds between reconnection attempts (rig clock).
@@ -19,12 +30,17 @@ pub struct RecoveryPolicy {
     /// After this long without the device the run reports itself paused, and keeps polling (it never gives up on a
     /// device that is merely absent: an overnight scan waits for someone to plug the cable back in).
     pub pause_after_s: f64,
+    /// After a recovery a scan re-measures a committed reference point; a relative error (error energy over the
+    /// committed response's energy) above this, dB, is reported as a warning: the rig may not be as it was
+    /// (moved plate, shifted beam, a setting not restored).
+    pub reference_limit_db: f64,
 }
 
 impl Default for RecoveryPolicy {
-    /// Poll every 2 s; report a pause after 60 s.
+    /// Poll every 2 s; report a pause after 60 s; warn when the reference point moved by more than -20 dB (10 %
+    /// in amplitude: noise between two quick-protocol measurements is some 30 dB down, see the faults test).
     fn default() -> Self {
-        Self { poll_interval_s: 2.0, pause_after_s: 60.0 }
+        Self { poll_interval_s: 2.0, pause_after_s: 60.0, reference_limit_db: -20.0 }
     }
 }
 
@@ -231,7 +247,9 @@ impl<'a> Instruments<'a> {
         let _ = self.rig.audio.finish();
     }
 
-    /// Reconnects `device` and re-applies every setting, polling on the rig's clock while it stays away.
+    /// Reconnects `device` and re-applies every setting, polling on the rig's clock while it stays away. A device
+    /// found away while re-applying the settings (a hub glitch takes all three) joins the devices reopened at each
+    /// poll, so that recovery never waits on a device it does not reopen.
     fn reconnect(
         &mut self,
         device: Device,
@@ -242,16 +260,16 @@ impl<'a> Instruments<'a> {
         let clock = self.rig.clock.clone();
         let started_s = clock.now_s();
         let mut paused = false;
+        let mut away = vec![device];
         loop {
-            let attempt: Result<(), Fault> = match device {
-                Device::Vibrometer => self.rig.vibrometer.reconnect().map_err(Fault::from),
-                Device::Daq => self.rig.daq.reopen().map_err(Fault::from),
-                Device::Audio => self.rig.audio.reopen().map_err(Fault::from),
-            }
-            .and_then(|()| self.configure());
+            let attempt = away.iter().try_for_each(|d| self.reopen(*d)).and_then(|()| self.configure());
             match attempt {
                 Ok(()) => return Ok(()),
                 Err(Fault::Fatal(e)) => return Err(e),
+                Err(Fault::Link(other, _)) if !away.contains(&other) => {
+                    tracing::warn!(?other, "another device is away too; reopening it as well");
+                    away.push(other);
+                }
                 Err(Fault::Link(..) | Fault::Spoiled(_)) => {}
             }
             if control.abandon_requested() {
@@ -260,11 +278,20 @@ impl<'a> Instruments<'a> {
             let away_s = clock.now_s() - started_s;
             if !paused && away_s >= self.policy.pause_after_s {
                 paused = true;
-                let detail = format!("{device:?} unreachable for {away_s:.0} s ({detail}); paused, still polling");
+                let detail = format!("{away:?} unreachable for {away_s:.0} s ({detail}); paused, still polling");
                 tracing::error!("{detail}");
                 observer.event(&Event::Paused { detail });
             }
             clock.sleep_s(self.policy.poll_interval_s);
+        }
+    }
+
+    /// One attempt to reopen `device`.
+    fn reopen(&mut self, device: Device) -> Result<(), Fault> {
+        match device {
+            Device::Vibrometer => self.rig.vibrometer.reconnect().map_err(Fault::from),
+            Device::Daq => self.rig.daq.reopen().map_err(Fault::from),
+            Device::Audio => self.rig.audio.reopen().map_err(Fault::from),
         }
     }
 
@@ -338,5 +365,159 @@ impl<'a> Instruments<'a> {
             Err(VibrometerError::InvalidArgument { .. }) => Ok(false),
             Err(e) => Err(e.into()),
         }
+    }
+}
+
+/// After a device recovery, before the next point, a scan re-measures one committed point (the plan's first one
+/// committed valid or re-measured, one actuator) and compares it with what was committed: the check the issue asks
+/// of every recovery (reconnect, drain, re-apply settings, re-measure a reference point), so that a rig that came
+/// back different (a setting not restored, a moved beam or plate) is reported instead of silently measured.
+///
+/// The reference is re-measured with one actuator alone, the scan protocol's sweep and repetitions and the
+/// actuator's inverse filter: for a simultaneous protocol (Hadamard) that is the same response by superposition,
+/// in the same units. The deviation is logged and reported as [`Event::ReferenceChecked`]; above
+/// [`RecoveryPolicy::reference_limit_db`] it is a warning (the scan goes on: a person decides).
+pub(crate) struct ReferenceCheck<'a> {
+    dir: &'a std::path::Path,
+    points: &'a [usize],
+    protocol: &'a ScanProtocol,
+    filters: Option<&'a [KirkebyFilter]>,
+    actuator: usize,
+    limit_db: f64,
+    /// The scan's SNR gate: a re-measure below it (a dropout in the middle) is repeated, not compared.
+    min_snr_db: f64,
+    /// Loaded at the first check.
+    reference: Option<Reference>,
+}
+
+/// A committed point to re-measure: grid index, beam position (m), committed response (m/s per full scale).
+type Reference = (usize, (f64, f64), Vec<f64>);
+
+impl<'a> ReferenceCheck<'a> {
+    /// The check for a scan of `plan` into `out` with `cfg` and `calibration`, on actuator 0.
+    pub(crate) fn new(
+        out: &'a Output,
+        plan: &'a ScanPlan,
+        cfg: &'a ScanConfig,
+        calibration: Option<&'a Calibration>,
+    ) -> Self {
+        Self {
+            dir: &out.dir,
+            points: &plan.points,
+            protocol: &cfg.protocol,
+            filters: calibration.map(|c| c.filters.as_slice()),
+            actuator: 0,
+            limit_db: cfg.recovery.reference_limit_db,
+            min_snr_db: cfg.min_snr_db,
+            reference: None,
+        }
+    }
+
+    /// If a device was recovered since the last call, re-measures the reference point and reports the deviation;
+    /// returns it, dB (`None` when nothing was recovered or nothing is committed yet to compare with).
+    ///
+    /// # Errors
+    /// Device errors that recovery cannot fix; [`RecipeError::Store`] if the committed reference cannot be read.
+    pub(crate) fn after_recovery(
+        &mut self,
+        instruments: &mut Instruments<'_>,
+        control: &RunControl,
+        observer: &mut dyn Observer,
+    ) -> Result<Option<f64>, RecipeError> {
+        if !instruments.recovered {
+            return Ok(None);
+        }
+        // Cleared first: a recovery during the re-measure sets it again, and the next point checks once more.
+        instruments.recovered = false;
+        if self.reference.is_none() {
+            self.reference = self.load()?;
+        }
+        let Some((point, position_m, committed)) = &self.reference else {
+            tracing::info!("device recovered before any point was committed: no reference to re-measure");
+            return Ok(None);
+        };
+        let Some(measured) = self.measure(instruments, *position_m, control, observer)? else {
+            tracing::warn!(point, "the reference re-measure failed the scan's gates three times; not compared");
+            return Ok(None);
+        };
+        let n = measured.len().min(committed.len());
+        let deviation_db = relative_error_db(&measured[..n], &committed[..n])?;
+        if deviation_db > self.limit_db {
+            tracing::warn!(
+                point,
+                deviation_db,
+                limit_db = self.limit_db,
+                "after recovery the reference point differs from its committed response: check the rig"
+            );
+        } else {
+            tracing::info!(point, deviation_db, "reference point re-measured after recovery");
+        }
+        observer.event(&Event::ReferenceChecked {
+            point: *point,
+            actuator: self.actuator,
+            deviation_db,
+            limit_db: self.limit_db,
+        });
+        Ok(Some(deviation_db))
+    }
+
+    /// The plan's first point whose reference row is committed as valid or re-measured.
+    fn load(&self) -> Result<Option<Reference>, RecipeError> {
+        let dataset = match Dataset::open(self.dir) {
+            Ok(d) => d,
+            Err(StoreError::EmptyDataset { .. }) => return Ok(None),
+            Err(e) => return Err(e.into()),
+        };
+        let key = self.actuator as u16;
+        for &p in self.points {
+            let (Some(meta), Some(ir)) = (dataset.meta(p as u32, key), dataset.ir(p as u32, key)) else {
+                continue;
+            };
+            if matches!(meta.status, Some(Status::Valid | Status::ReMeasured)) {
+                let ir = ir.iter().map(|v| f64::from(*v)).collect();
+                return Ok(Some((p, (meta.x_m, meta.y_m), ir)));
+            }
+        }
+        Ok(None)
+    }
+
+    /// One response of the reference actuator at `position_m`, m/s per full scale; `None` if three recordings in a
+    /// row had gaps, clipped or failed the SNR gate.
+    fn measure(
+        &self,
+        instruments: &mut Instruments<'_>,
+        (x_m, y_m): (f64, f64),
+        control: &RunControl,
+        observer: &mut dyn Observer,
+    ) -> Result<Option<Vec<f64>>, RecipeError> {
+        const ATTEMPTS: u32 = 3;
+        let fs = instruments.daq_rate_hz();
+        let sweep = excitation(&self.protocol.sweep, fs)?;
+        let deconv = DeconvConfig { sample_rate_hz: fs, ..self.protocol.deconv };
+        // The scan's tail: the response and the longest filter.
+        let fir_len = self.filters.map_or(0, |f| f.iter().map(|k| k.taps.len()).max().unwrap_or(0));
+        let filter = self.filters.and_then(|f| f.get(self.actuator));
+        let playback = Playback::new(&sweep, self.protocol.repetitions, deconv.ir_len + fir_len, filter)?;
+        let buffers = playback.audio_buffers(&instruments.rig.wiring, self.actuator, fs)?;
+        let record = record_samples(&playback, fs);
+        let layout = RepetitionLayout { excitation: sweep, repetitions: self.protocol.repetitions };
+        let prepared = PreparedLayout::new(&layout, &deconv)?;
+        instruments.with_recovery(control, observer, |i| i.aim(x_m, y_m))?;
+        for _ in 0..ATTEMPTS {
+            let acq = instruments.with_recovery(control, observer, |i| i.acquire(&buffers, record))?;
+            if !acq.is_whole() || acq.clipped {
+                continue;
+            }
+            // A processing failure is a bad recording (as the scan treats it), not a reason to stop the scan.
+            let Ok(result) = prepared.process_channel(&acq.velocity_v, &acq.loopback_v) else {
+                continue;
+            };
+            if result.snr_db.is_some_and(|snr| snr < self.min_snr_db) {
+                continue;
+            }
+            let to_units = acq.scale.m_s_per_v * instruments.rig.wiring.loopback_volts_per_full_scale;
+            return Ok(Some(result.ir.iter().map(|v| v * to_units).collect()));
+        }
+        Ok(None)
     }
 }

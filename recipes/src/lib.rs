@@ -11,6 +11,7 @@ pub mod control;
 pub mod dataset;
 pub mod error;
 pub mod instruments;
+pub mod protocol;
 pub mod quality;
 pub mod scan;
 pub mod signals;

@@ -56,6 +56,31 @@ pub fn flatness(ir: &[f64], sample_rate_hz: f64, lo_hz: f64, hi_hz: f64) -> Resu
     Ok(Flatness { median_db, min_db: min - median_db, max_db: max - median_db })
 }
 
+/// Relative error of `measured` against `reference`, dB: `10 log10(sum (m - r)^2 / sum r^2)` over their samples
+/// (by Parseval, the same as over their spectra). -20 dB is a 10 % error in amplitude; 0 dB an error as large as
+/// the reference.
+///
+/// Valid range: finite signals of equal, nonzero length; a reference with some energy. The result is finite: a
+/// measurement equal to the reference returns -400 dB (far below anything f64 rounding resolves).
+///
+/// # Errors
+/// [`DspError::Empty`] / [`DspError::NonFinite`] for either signal; [`DspError::LengthMismatch`] for different
+/// lengths; [`DspError::InvalidParameter`] for an all-zero reference.
+pub fn relative_error_db(measured: &[f64], reference: &[f64]) -> Result<f64, DspError> {
+    metaplate_dsp::error::check_signal("measured", measured)?;
+    metaplate_dsp::error::check_signal("reference", reference)?;
+    if measured.len() != reference.len() {
+        return Err(DspError::LengthMismatch { what: "measured and reference", a: measured.len(), b: reference.len() });
+    }
+    let energy: f64 = reference.iter().map(|r| r * r).sum();
+    if energy <= 0.0 {
+        return Err(DspError::InvalidParameter { name: "reference", reason: "is all zero".into() });
+    }
+    let error: f64 = measured.iter().zip(reference).map(|(m, r)| (m - r) * (m - r)).sum();
+    // -400 dB stands for "identical": below anything f64 rounding can resolve, and finite.
+    Ok((10.0 * (error / energy).log10()).max(-400.0))
+}
+
 /// Median of finite values (sorts in place); `None` for an empty slice. Even counts average the middle two.
 pub fn median(values: &mut [f64]) -> Option<f64> {
     if values.is_empty() {
@@ -83,6 +108,21 @@ mod tests {
         assert!((f.max_db - f.min_db - 20.0 * 3f64.log10()).abs() < 1e-9, "{f:?}");
         assert!(flatness(&comb, 24_000.0, 100.0, 101.0).is_err());
         assert!(flatness(&[], 24_000.0, 0.0, 1.0).is_err());
+    }
+
+    #[test]
+    fn relative_error_of_scaled_identical_and_bad_inputs() {
+        let r = [1.0, -2.0, 0.5, 0.0];
+        // m = 1.1 r: error energy 0.01 of the reference's: -20 dB up to rounding.
+        let m: Vec<f64> = r.iter().map(|v| 1.1 * v).collect();
+        assert!((relative_error_db(&m, &r).unwrap() + 20.0).abs() < 1e-9);
+        // m = 0: 0 dB exactly; identical: the -400 dB floor.
+        assert!(relative_error_db(&[0.0; 4], &r).unwrap().abs() < 1e-12);
+        assert_eq!(relative_error_db(&r, &r).unwrap(), -400.0);
+        assert!(relative_error_db(&r, &[0.0; 4]).is_err());
+        assert!(relative_error_db(&r[..3], &r).is_err());
+        assert!(relative_error_db(&[], &[]).is_err());
+        assert!(relative_error_db(&[f64::NAN; 4], &r).is_err());
     }
 
     #[test]

@@ -16,7 +16,8 @@ use std::sync::mpsc;
 use metaplate_core::grid::GridSpec;
 use metaplate_core::rig::Rig;
 use metaplate_dsp::deconv::DeconvConfig;
-use metaplate_dsp::pipeline::{PreparedLayout, RepetitionLayout};
+use metaplate_dsp::pipeline::{ChannelResult, PreparedLayout, RepetitionLayout};
+use metaplate_dsp::protocol::Protocol;
 use metaplate_dsp::sweep::SweepSpec;
 use metaplate_store::{DatasetMeta, IrMeta, IrRecord, Status};
 use serde_json::{Map, Value, json};
@@ -27,8 +28,9 @@ use crate::control::{Event, Observer, RunControl};
 use crate::dataset::{self, Output};
 use crate::error::RecipeError;
 use crate::instruments::{Acquisition, Instruments, RecoveryPolicy};
+use crate::protocol::{Adaptive, Excitation};
 use crate::quality::median;
-use crate::signals::{AudioPlayback, Playback, excitation};
+use crate::signals::{AudioPlayback, Playback, SimultaneousPlayback, excitation};
 
 /// Recipe name in the manifest.
 pub const RECIPE: &str = "scan";
@@ -44,12 +46,23 @@ pub struct ScanProtocol {
     pub repetitions: usize,
     /// Deconvolution (its `sample_rate_hz` is replaced by the DAQ's).
     pub deconv: DeconvConfig,
+    /// How the actuators are played (one at a time, or all at once).
+    pub excitation: Excitation,
+    /// Averaging until a target SNR (simultaneous protocols only); `None`: one round.
+    pub adaptive: Option<Adaptive>,
 }
 
 impl ScanProtocol {
     /// The paper's: a 3 s linear sweep 62..625 Hz, 5 repetitions, [`DeconvConfig::paper`] (0.5 s responses).
     pub fn paper() -> Self {
-        Self { name: "paper".into(), sweep: SweepSpec::default(), repetitions: 5, deconv: DeconvConfig::paper() }
+        Self {
+            name: "paper".into(),
+            sweep: SweepSpec::default(),
+            repetitions: 5,
+            deconv: DeconvConfig::paper(),
+            excitation: Excitation::Sequential,
+            adaptive: None,
+        }
     }
 
     /// For tests and quick looks: a 1 s sweep 62..625 Hz, 2 repetitions, the paper's deconvolution (0.5 s
@@ -61,19 +74,18 @@ impl ScanProtocol {
             sweep: SweepSpec { duration_s: 1.0, ..SweepSpec::default() },
             repetitions: 2,
             deconv: DeconvConfig::paper(),
+            excitation: Excitation::Sequential,
+            adaptive: None,
         }
     }
 
-    /// A protocol by name: `paper` or `quick`.
+    /// A protocol by name: `paper`, `quick`, or one with settings such as `hadamard:1x2` (the syntax and every
+    /// protocol's assumptions: [`crate::protocol`]).
     ///
     /// # Errors
-    /// [`RecipeError::Config`] for another name.
+    /// [`RecipeError::Config`] for an unknown name or bad settings.
     pub fn by_name(name: &str) -> Result<Self, RecipeError> {
-        match name {
-            "paper" => Ok(Self::paper()),
-            "quick" => Ok(Self::quick()),
-            other => Err(RecipeError::Config(format!("unknown protocol `{other}` (known: paper, quick)"))),
-        }
+        crate::protocol::parse(name)
     }
 
     /// Seconds of playback per actuator and point (repetitions and tail), at nominal rates.
@@ -162,6 +174,12 @@ impl ScanConfig {
         let d = &p.deconv;
         let value = json!({
             "protocol": { "name": p.name, "repetitions": p.repetitions,
+                "excitation": match p.excitation {
+                    Excitation::Sequential => json!({ "kind": "sequential" }),
+                    Excitation::Hadamard => json!({ "kind": "hadamard" }),
+                    Excitation::Interleaved { slot_s } => json!({ "kind": "interleaved", "slot_s": slot_s }),
+                },
+                "adaptive": p.adaptive.map(|a| json!({ "target_snr_db": a.target_snr_db, "max_rounds": a.max_rounds })),
                 "sweep": { "f1_hz": s.f1_hz, "f2_hz": s.f2_hz, "duration_s": s.duration_s, "amplitude": s.amplitude,
                            "fade_in_s": s.fade_in_s, "fade_out_s": s.fade_out_s, "kind": format!("{:?}", s.kind) },
                 "deconv": { "ir_len": d.ir_len, "pre_samples": d.pre_samples, "regularisation": d.regularisation,
@@ -196,6 +214,8 @@ pub struct ScanSummary {
     pub deferred: usize,
     /// Rig clock seconds this run took (simulated in the mock lab).
     pub clock_s: f64,
+    /// Wall-clock seconds this run spent in commits (batch file, fsyncs, journal line).
+    pub commit_s: f64,
 }
 
 /// Why a row is not (yet) good.
@@ -206,6 +226,12 @@ enum Problem {
     Processing(String),
     LowSnr(f64),
     Drift(f64),
+    /// An adaptive protocol's target SNR, not reached within its rounds (final: not deferred).
+    Unreached {
+        snr_db: Option<f64>,
+        target_db: f64,
+        rounds: usize,
+    },
 }
 
 impl Problem {
@@ -214,8 +240,13 @@ impl Problem {
         match self {
             Problem::Clipped => Status::Overrange,
             Problem::Gap | Problem::Processing(_) => Status::Dropout,
-            Problem::LowSnr(_) | Problem::Drift(_) => Status::Failed,
+            Problem::LowSnr(_) | Problem::Drift(_) | Problem::Unreached { .. } => Status::Failed,
         }
+    }
+
+    /// Whether a re-measure is pointless (the problem already is the outcome of a bounded effort).
+    fn is_final(&self) -> bool {
+        matches!(self, Problem::Unreached { .. })
     }
 
     fn describe(&self) -> String {
@@ -225,6 +256,10 @@ impl Problem {
             Problem::Processing(e) => format!("processing failed: {e}"),
             Problem::LowSnr(snr) => format!("SNR {snr:.1} dB below the limit"),
             Problem::Drift(ppm) => format!("clock drift {ppm:.0} ppm beyond the limit"),
+            Problem::Unreached { snr_db, target_db, rounds } => format!(
+                "SNR {} below the adaptive target {target_db:.1} dB after {rounds} rounds",
+                snr_db.map_or("unknown".to_string(), |s| format!("{s:.1} dB"))
+            ),
         }
     }
 }
@@ -256,7 +291,17 @@ struct Channel {
 struct Job {
     point: usize,
     aimed: Aimed,
-    channels: Vec<Channel>,
+    work: Work,
+}
+
+/// What a job carries to the worker.
+enum Work {
+    /// Sequential: one acquisition per pending actuator.
+    Channels(Vec<Channel>),
+    /// Simultaneous: one acquisition per shot, for the pending actuators; the worst acquisition problem.
+    Shots { pending: Vec<usize>, acquisitions: Vec<Acquisition>, problem: Option<Problem> },
+    /// Already processed (adaptive protocols decide between rounds, so they decode as they acquire).
+    Done(Vec<Outcome>),
 }
 
 /// One processed channel: actuator, response (m/s per full scale) and SNR when processing succeeded, problem.
@@ -300,7 +345,7 @@ pub fn scan(
         cfg.seed,
         plan.grid,
     );
-    let mut opened = dataset::open(out, meta)?;
+    let mut opened = dataset::open(out, meta, control)?;
     let is_committed = |p: usize| (0..actuators).all(|a| opened.committed.contains(&(p as u32, a as u16)));
     let todo: VecDeque<usize> = plan.points.iter().copied().filter(|&p| !is_committed(p)).collect();
     let total = plan.points.len();
@@ -317,13 +362,25 @@ pub fn scan(
     let deconv = DeconvConfig { sample_rate_hz: fs, ..protocol.deconv };
     let layout = RepetitionLayout { excitation: sweep.clone(), repetitions: protocol.repetitions };
     let prepared = PreparedLayout::new(&layout, &deconv)?;
-    let playbacks = build_playbacks(&instruments, &sweep, protocol, &deconv, calibration)?;
-    let record = record_samples(&playbacks.0, fs);
+    let (playbacks, simultaneous, record) = if protocol.is_simultaneous() {
+        let sim = Simultaneous::new(&instruments, protocol, &deconv, calibration)?;
+        // As `record_samples`: all of the playback plus 0.1 s for the audio interface's output latency.
+        let record = sim.playback.daq_len + (0.1 * fs).ceil() as usize;
+        (Vec::new(), Some(sim), record)
+    } else {
+        let playbacks = build_playbacks(&instruments, &sweep, protocol, &deconv, calibration)?;
+        let record = record_samples(&playbacks.0, fs);
+        (playbacks.1, None, record)
+    };
+    let gates = Gates { min_snr_db: cfg.min_snr_db, max_drift_ppm: cfg.max_drift_ppm, volts_per_fs };
 
     let mut ctx = Context {
         plan,
         cfg,
-        playbacks: &playbacks.1,
+        playbacks: &playbacks,
+        simultaneous: simultaneous.as_ref(),
+        gates: &gates,
+        actuators,
         record,
         states: BTreeMap::new(),
         deferred: VecDeque::new(),
@@ -333,19 +390,20 @@ pub fn scan(
         fs,
         t0,
     };
-    let gates = Gates { min_snr_db: cfg.min_snr_db, max_drift_ppm: cfg.max_drift_ppm, volts_per_fs };
     let result = std::thread::scope(|scope| -> Result<(), RecipeError> {
         let (job_tx, job_rx) = mpsc::channel::<Job>();
         let (done_tx, done_rx) = mpsc::channel::<Processed>();
         let prepared = &prepared;
         let gates = &gates;
+        let simultaneous = simultaneous.as_ref();
         scope.spawn(move || {
             for job in job_rx {
-                if done_tx.send(process(job, prepared, gates)).is_err() {
+                if done_tx.send(process(job, prepared, simultaneous, gates)).is_err() {
                     break;
                 }
             }
         });
+        let mut reference = crate::instruments::ReferenceCheck::new(out, plan, cfg, calibration);
         let mut main = todo;
         let mut in_flight = false;
         loop {
@@ -359,7 +417,10 @@ pub fn scan(
                 None
             };
             let job = match next {
-                Some(point) => ctx.acquire_point(&mut instruments, point, control, observer)?,
+                Some(point) => {
+                    reference.after_recovery(&mut instruments, control, observer)?;
+                    ctx.acquire_point(&mut instruments, point, control, observer)?
+                }
                 None => None,
             };
             if in_flight {
@@ -425,9 +486,25 @@ struct Gates {
 }
 
 /// Deconvolves and gates every channel of a job (on the worker thread).
-fn process(job: Job, prepared: &PreparedLayout, gates: &Gates) -> Processed {
-    let outcomes = job
-        .channels
+fn process(job: Job, prepared: &PreparedLayout, simultaneous: Option<&Simultaneous>, gates: &Gates) -> Processed {
+    let outcomes = match (job.work, simultaneous) {
+        (Work::Channels(channels), _) => process_channels(channels, prepared, gates),
+        (Work::Shots { pending, acquisitions, problem }, Some(sim)) => {
+            let decoded = sim.decode(&acquisitions, gates).map(|results| results.into_iter().map(Some).collect());
+            sim.outcomes(&pending, decoded, problem, gates)
+        }
+        (Work::Shots { pending, .. }, None) => {
+            let problem = Problem::Processing("shots without a simultaneous protocol".into());
+            pending.into_iter().map(|a| (a, None, Some(problem.clone()))).collect()
+        }
+        (Work::Done(outcomes), _) => outcomes,
+    };
+    Processed { point: job.point, aimed: job.aimed, outcomes }
+}
+
+/// Deconvolves and gates the channels of a sequential job.
+fn process_channels(channels: Vec<Channel>, prepared: &PreparedLayout, gates: &Gates) -> Vec<Outcome> {
+    channels
         .into_iter()
         .map(|ch| {
             let acq = &ch.acquisition;
@@ -449,14 +526,160 @@ fn process(job: Job, prepared: &PreparedLayout, gates: &Gates) -> Processed {
             let problem = ch.problem.or(gate);
             (ch.actuator, result, problem)
         })
-        .collect();
-    Processed { point: job.point, aimed: job.aimed, outcomes }
+        .collect()
+}
+
+/// Whether an acquisition is usable: whole (no gap or underrun) and unclipped.
+fn acquisition_problem(acq: &Acquisition) -> Option<Problem> {
+    if !acq.is_whole() {
+        Some(Problem::Gap)
+    } else if acq.clipped {
+        Some(Problem::Clipped)
+    } else {
+        None
+    }
+}
+
+/// A simultaneous protocol ready to play and decode.
+struct Simultaneous {
+    /// The DSP protocol (decoding at the DAQ rate).
+    protocol: Protocol,
+    /// Deconvolution at the DAQ rate.
+    deconv: DeconvConfig,
+    playback: SimultaneousPlayback,
+    adaptive: Option<Adaptive>,
+}
+
+impl Simultaneous {
+    fn new(
+        instruments: &Instruments<'_>,
+        protocol: &ScanProtocol,
+        deconv: &DeconvConfig,
+        calibration: Option<&Calibration>,
+    ) -> Result<Self, RecipeError> {
+        let wiring = &instruments.rig.wiring;
+        let fs = instruments.daq_rate_hz();
+        let dsp = protocol.dsp();
+        dsp.validate(wiring.actuator_channels.len(), deconv.ir_len as f64 / fs)?;
+        let fir_len = calibration.map_or(0, |c| c.filters.iter().map(|f| f.taps.len()).max().unwrap_or(0));
+        // The tail holds the last response (ir_len) and the filter's own length, as in the sequential playback.
+        let filters = calibration.map(|c| c.filters.as_slice());
+        let playback = SimultaneousPlayback::new(&dsp, wiring, fs, deconv.ir_len + fir_len, filters)?;
+        Ok(Self { protocol: dsp, deconv: *deconv, playback, adaptive: protocol.adaptive })
+    }
+
+    /// Every actuator's response (m/s per full scale of its compensated drive) and SNR from one round of shots.
+    fn decode(&self, acquisitions: &[Acquisition], gates: &Gates) -> Result<Vec<ChannelResult>, Problem> {
+        // Velocity in m/s per loopback full scale, so that the responses come out in m/s per full scale.
+        let velocities: Vec<Vec<f64>> = acquisitions
+            .iter()
+            .map(|a| a.velocity_v.iter().map(|v| v * a.scale.m_s_per_v * gates.volts_per_fs).collect())
+            .collect();
+        let pairs: Vec<(&[f64], &[f64])> =
+            velocities.iter().zip(acquisitions).map(|(v, a)| (v.as_slice(), a.loopback_v.as_slice())).collect();
+        let mut results = self
+            .protocol
+            .decode(self.playback.response_gain.len(), &pairs, &self.deconv)
+            .map_err(|e| Problem::Processing(e.to_string()))?;
+        for (r, gain) in results.iter_mut().zip(&self.playback.response_gain) {
+            r.ir.iter_mut().for_each(|v| *v *= gain);
+        }
+        Ok(results)
+    }
+
+    /// Outcomes of the pending actuators from decoded results (or why there are none), gated like sequential ones;
+    /// an acquisition problem explains a gate failure better than the gate itself.
+    fn outcomes(
+        &self,
+        pending: &[usize],
+        decoded: Result<Vec<Option<ChannelResult>>, Problem>,
+        problem: Option<Problem>,
+        gates: &Gates,
+    ) -> Vec<Outcome> {
+        pending
+            .iter()
+            .map(|&a| match &decoded {
+                Err(e) => (a, None, problem.clone().or_else(|| Some(e.clone()))),
+                Ok(results) => match results.get(a).cloned().flatten() {
+                    None => (a, None, problem.clone().or(Some(Problem::Processing(format!("no response {a}"))))),
+                    Some(r) => {
+                        let gate = if r.drift_ppm.abs() > gates.max_drift_ppm {
+                            Some(Problem::Drift(r.drift_ppm))
+                        } else {
+                            r.snr_db.filter(|s| *s < gates.min_snr_db).map(Problem::LowSnr)
+                        };
+                        (a, Some((r.ir, r.snr_db)), problem.clone().or(gate))
+                    }
+                },
+            })
+            .collect()
+    }
+}
+
+/// Coherent average of adaptive rounds, with the noise of the average from each round's SNR.
+struct Averager {
+    count: usize,
+    /// Per actuator: sum of the responses, and sum of the rounds' noise energies (`None` once a round had none).
+    sums: Vec<(Vec<f64>, Option<f64>)>,
+    drift_ppm: f64,
+}
+
+impl Averager {
+    fn new(actuators: usize) -> Self {
+        Self { count: 0, sums: vec![(Vec::new(), Some(0.0)); actuators], drift_ppm: 0.0 }
+    }
+
+    fn add(&mut self, results: &[ChannelResult]) {
+        self.count += 1;
+        for ((sum, noise), r) in self.sums.iter_mut().zip(results) {
+            sum.resize(r.ir.len(), 0.0);
+            sum.iter_mut().zip(&r.ir).for_each(|(s, v)| *s += v);
+            // A round's noise energy from its SNR: energy / 10^(snr/10).
+            *noise = noise.zip(r.snr_db).map(|(n, snr)| n + energy(&r.ir) / 10f64.powf(snr / 10.0));
+        }
+        self.drift_ppm = self.drift_ppm.max(results.iter().fold(0.0f64, |m, r| m.max(r.drift_ppm.abs())));
+    }
+
+    /// The averaged responses, with the average's SNR: its energy over the mean noise energy divided by the count
+    /// (independent noise averages down by the number of rounds).
+    fn averaged(&self) -> Vec<Option<ChannelResult>> {
+        let n = self.count.max(1) as f64;
+        (0..self.sums.len())
+            .map(|a| {
+                let (sum, _) = &self.sums[a];
+                let ir: Vec<f64> = sum.iter().map(|v| v / n).collect();
+                let snr_db = self.snr_db(&[a]).into_iter().next().flatten();
+                Some(ChannelResult { ir, snr_db, drift_ppm: self.drift_ppm, latency_samples: 0.0 })
+            })
+            .collect()
+    }
+
+    /// SNR of the average for each of `actuators`, dB; `None` where unknown.
+    fn snr_db(&self, actuators: &[usize]) -> Vec<Option<f64>> {
+        let n = self.count.max(1) as f64;
+        actuators
+            .iter()
+            .map(|&a| {
+                let (sum, noise) = self.sums.get(a)?;
+                let signal = energy(sum) / (n * n);
+                let noise = (*noise)? / n / n;
+                (noise > 0.0 && signal > 0.0).then(|| 10.0 * (signal / noise).log10())
+            })
+            .collect()
+    }
+}
+
+fn energy(signal: &[f64]) -> f64 {
+    signal.iter().map(|x| x * x).sum()
 }
 
 struct Context<'p> {
     plan: &'p ScanPlan,
     cfg: &'p ScanConfig,
     playbacks: &'p [AudioPlayback],
+    simultaneous: Option<&'p Simultaneous>,
+    gates: &'p Gates,
+    actuators: usize,
     record: usize,
     states: BTreeMap<usize, PointState>,
     deferred: VecDeque<usize>,
@@ -476,7 +699,7 @@ impl Context<'_> {
         control: &RunControl,
         observer: &mut dyn Observer,
     ) -> Result<Option<Job>, RecipeError> {
-        let actuators = self.playbacks.len();
+        let actuators = self.actuators;
         let state = self.states.entry(point).or_insert_with(|| PointState {
             visit: 0,
             rows: vec![Row { acquisitions: 0, result: None, problem: None, done: false }; actuators],
@@ -485,6 +708,13 @@ impl Context<'_> {
         let pending: Vec<usize> = (0..actuators).filter(|&a| !state.rows[a].done).collect();
         let position = self.plan.grid.position_m(point);
         let aimed = aim(instruments, position, (self.cfg.seed, point as u64, visit), &self.cfg.aim, control, observer)?;
+        if let Some(sim) = self.simultaneous {
+            let work = match self.acquire_simultaneous(instruments, point, &pending, sim, control, observer)? {
+                Some(work) => work,
+                None => return Ok(None),
+            };
+            return Ok(Some(Job { point, aimed, work }));
+        }
         let mut channels = Vec::with_capacity(pending.len());
         for actuator in pending {
             let buffers = self.playbacks[actuator].buffers();
@@ -495,13 +725,7 @@ impl Context<'_> {
                 }
                 let acq = instruments.with_recovery(control, observer, |i| i.acquire(&buffers, self.record))?;
                 attempt += 1;
-                let problem = if !acq.is_whole() {
-                    Some(Problem::Gap)
-                } else if acq.clipped {
-                    Some(Problem::Clipped)
-                } else {
-                    None
-                };
+                let problem = acquisition_problem(&acq);
                 match problem {
                     Some(p) if attempt < self.cfg.max_attempts => {
                         observer.event(&Event::Retry { unit: point, attempt, reason: p.describe() });
@@ -514,7 +738,92 @@ impl Context<'_> {
             }
             channels.push(Channel { actuator, acquisition, problem });
         }
-        Ok(Some(Job { point, aimed, channels }))
+        Ok(Some(Job { point, aimed, work: Work::Channels(channels) }))
+    }
+
+    /// Plays every shot of a simultaneous protocol at `point` (the beam already there), round after round for an
+    /// adaptive one; `None` if abandoned on request.
+    fn acquire_simultaneous(
+        &mut self,
+        instruments: &mut Instruments<'_>,
+        point: usize,
+        pending: &[usize],
+        sim: &Simultaneous,
+        control: &RunControl,
+        observer: &mut dyn Observer,
+    ) -> Result<Option<Work>, RecipeError> {
+        let mut rounds = Averager::new(self.actuators);
+        let max_rounds = sim.adaptive.map_or(1, |a| a.max_rounds);
+        let mut retries = 0;
+        loop {
+            let mut acquisitions = Vec::with_capacity(sim.playback.signs.len());
+            let mut worst = None;
+            for shot in 0..sim.playback.signs.len() {
+                let buffers = sim
+                    .playback
+                    .buffers(shot)
+                    .ok_or_else(|| RecipeError::Config(format!("shot {shot} has no buffers")))?;
+                let mut attempt = 0;
+                let (acquisition, problem) = loop {
+                    if control.abandon_requested() {
+                        return Ok(None);
+                    }
+                    let acq = instruments.with_recovery(control, observer, |i| i.acquire(&buffers, self.record))?;
+                    attempt += 1;
+                    let problem = acquisition_problem(&acq);
+                    match problem {
+                        Some(p) if attempt < self.cfg.max_attempts => {
+                            observer.event(&Event::Retry { unit: point, attempt, reason: p.describe() });
+                            // Every actuator at once can move the plate up to `actuators` times faster than one:
+                            // a clipped shot asks the vibrometer for a wider range (kept for the rest of the run;
+                            // each shot is converted with its own scale, so a round may mix ranges).
+                            if p == Problem::Clipped {
+                                let grew = instruments.with_recovery(control, observer, |i| i.widen_range())?;
+                                tracing::info!(point, grew, "clipped shot: velocity range widened");
+                            }
+                        }
+                        other => break (acq, other),
+                    }
+                };
+                retries += attempt - 1;
+                worst = worst.or(problem);
+                acquisitions.push(acquisition);
+            }
+            if let Some(s) = self.states.get_mut(&point) {
+                for &a in pending {
+                    s.rows[a].acquisitions += retries + u32::from(rounds.count == 0);
+                }
+            }
+            retries = 0;
+            let Some(adaptive) = sim.adaptive else {
+                return Ok(Some(Work::Shots { pending: pending.to_vec(), acquisitions, problem: worst }));
+            };
+            // Adaptive: decode this round now, to decide whether another is needed.
+            if worst.is_some() {
+                let decoded = Err(Problem::Processing("an acquisition of the round failed".into()));
+                return Ok(Some(Work::Done(sim.outcomes(pending, decoded, worst, self.gates))));
+            }
+            match sim.decode(&acquisitions, self.gates) {
+                Ok(results) => rounds.add(&results),
+                Err(problem) => return Ok(Some(Work::Done(sim.outcomes(pending, Err(problem), None, self.gates)))),
+            }
+            let snrs = rounds.snr_db(pending);
+            let reached = snrs.iter().all(|s| s.is_some_and(|s| s >= adaptive.target_snr_db));
+            if reached || rounds.count >= max_rounds {
+                let averaged = rounds.averaged();
+                let mut outcomes = sim.outcomes(pending, Ok(averaged), None, self.gates);
+                for (outcome, snr) in outcomes.iter_mut().zip(snrs) {
+                    if outcome.2.is_none() && snr.is_none_or(|s| s < adaptive.target_snr_db) {
+                        outcome.2 = Some(Problem::Unreached {
+                            snr_db: snr,
+                            target_db: adaptive.target_snr_db,
+                            rounds: rounds.count,
+                        });
+                    }
+                }
+                return Ok(Some(Work::Done(outcomes)));
+            }
+        }
     }
 
     /// Merges processed results into the point's rows; commits the point when every row is settled, else defers it.
@@ -536,7 +845,7 @@ impl Context<'_> {
             if let Some((ir, snr)) = result {
                 row.result = Some((ir, snr, processed.aimed));
             }
-            row.done = problem.is_none();
+            row.done = problem.as_ref().is_none_or(Problem::is_final);
             row.problem = problem;
             if last_visit {
                 row.done = true;
@@ -607,7 +916,9 @@ impl Context<'_> {
             };
             records.push(IrRecord { meta, ir: ir.iter().map(|v| *v as f32).collect() });
         }
+        let commit_started = std::time::Instant::now();
         writer.commit_batch(&records)?;
+        self.summary.commit_s += commit_started.elapsed().as_secs_f64();
         self.commits += 1;
         self.summary.committed_now += 1;
         self.summary.committed += 1;

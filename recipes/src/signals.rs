@@ -7,6 +7,7 @@
 
 use metaplate_core::rig::Wiring;
 use metaplate_dsp::kirkeby::KirkebyFilter;
+use metaplate_dsp::protocol::{Protocol, Shot};
 use metaplate_dsp::resample::Interpolator;
 use metaplate_dsp::sweep::SweepSpec;
 
@@ -60,8 +61,7 @@ impl Playback {
         };
         let mut loopback = vec![0.0; delay.min(total)];
         loopback.extend_from_slice(&repeated[..total - loopback.len()]);
-        let peak = drive.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let scale = if peak > 0.0 { (DRIVE_PEAK_FS / peak).min(1.0) } else { 1.0 };
+        let scale = peak_scale(&drive);
         drive.iter_mut().for_each(|v| *v *= scale);
         loopback.iter_mut().for_each(|v| *v *= scale);
         Ok(Self { drive, loopback, scale })
@@ -106,23 +106,168 @@ impl Playback {
             .actuator_channels
             .get(actuator)
             .ok_or_else(|| RecipeError::Config(format!("actuator {actuator} is not wired to an audio channel")))?;
-        let step = daq_rate_hz / wiring.audio_sample_rate_hz;
-        if !(0.5..=2.0).contains(&step) {
-            return Err(RecipeError::Config(format!(
-                "the audio rate {} Hz must lie within 0.5 to 2 times the DAQ rate {daq_rate_hz} Hz",
-                wiring.audio_sample_rate_hz
-            )));
-        }
-        let frames = (self.drive.len() as f64 / step).round() as usize;
-        let interpolator = Interpolator::for_band(0.4 * daq_rate_hz.min(wiring.audio_sample_rate_hz), daq_rate_hz);
+        let mut converted = to_audio_rate(&[&self.drive, &self.loopback], wiring, daq_rate_hz)?.into_iter();
+        let (Some(drive), Some(loopback)) = (converted.next(), converted.next()) else {
+            return Err(RecipeError::Config("audio conversion lost a signal".into()));
+        };
         Ok(AudioPlayback {
             channels: wiring.audio_channels as usize,
             drive_channel: channel as usize,
             loopback_channel: wiring.loopback_channel as usize,
-            drive: interpolator.resample(&self.drive, 0.0, step, frames)?,
-            loopback: interpolator.resample(&self.loopback, 0.0, step, frames)?,
+            drive,
+            loopback,
         })
     }
+}
+
+/// `signals` (all of one length, at `daq_rate_hz`) converted to the wiring's audio rate by one band-limited
+/// interpolator.
+///
+/// Valid range: `daq_rate_hz / audio_rate` within `[0.5, 2]`, content below 0.4 of the lower rate.
+///
+/// # Errors
+/// [`RecipeError::Config`] for rates out of range; [`RecipeError::Dsp`] from the interpolator.
+fn to_audio_rate(signals: &[&[f64]], wiring: &Wiring, daq_rate_hz: f64) -> Result<Vec<Vec<f64>>, RecipeError> {
+    let step = daq_rate_hz / wiring.audio_sample_rate_hz;
+    if !(0.5..=2.0).contains(&step) {
+        return Err(RecipeError::Config(format!(
+            "the audio rate {} Hz must lie within 0.5 to 2 times the DAQ rate {daq_rate_hz} Hz",
+            wiring.audio_sample_rate_hz
+        )));
+    }
+    let interpolator = Interpolator::for_band(0.4 * daq_rate_hz.min(wiring.audio_sample_rate_hz), daq_rate_hz);
+    signals
+        .iter()
+        .map(|signal| {
+            let frames = (signal.len() as f64 / step).round() as usize;
+            Ok(interpolator.resample(signal, 0.0, step, frames)?)
+        })
+        .collect()
+}
+
+/// The playback of a simultaneous protocol (every actuator in every shot, with a sign): each actuator's drive at
+/// sign +1 (its delay, then the repeated excitation through its own inverse filter), and the loopback reference,
+/// at the audio rate; shot `s` plays actuator `k`'s drive times the shot's gain.
+///
+/// Scaling: each drive is scaled on its own so that it peaks at [`DRIVE_PEAK_FS`] (at most 1), the loopback so
+/// that it does; a response decoded against the loopback is then `loopback scale / drive scale` times the
+/// actuator's (compensated) response, and [`SimultaneousPlayback::response_gain`] undoes it.
+///
+/// Filters with different modelling delays: every drive is delayed further by the difference to the largest
+/// delay and the loopback by the largest, so that each response is referred to its own filter's target.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimultaneousPlayback {
+    /// Output channels opened.
+    pub channels: usize,
+    /// Per actuator: (its audio channel, its drive at sign +1 at the audio rate, full scale).
+    pub drives: Vec<(usize, Vec<f64>)>,
+    /// Loopback channel and signal at the audio rate, full scale.
+    pub loopback: (usize, Vec<f64>),
+    /// Per shot, per actuator: the sign (+1 or -1) of its drive.
+    pub signs: Vec<Vec<f64>>,
+    /// Per actuator: multiply the response decoded against the loopback by this to get the response per full
+    /// scale of the compensated drive (as the sequential [`Playback`] gives).
+    pub response_gain: Vec<f64>,
+    /// Samples per channel at the DAQ rate (drive, tail and all).
+    pub daq_len: usize,
+}
+
+impl SimultaneousPlayback {
+    /// Builds the playback of `protocol` for the wiring's actuators at `daq_rate_hz`, with `tail_samples` of silence
+    /// after the last period, through `filters` (one per actuator, or raw when `None`).
+    ///
+    /// Valid range: a protocol whose shots all play every actuator with a gain of +1 or -1 and share their delays
+    /// (Hadamard, interleaved); one filter per wired actuator; rates as [`Playback::at_audio_rate`].
+    ///
+    /// # Errors
+    /// [`RecipeError::Config`] for a protocol outside that range, the wrong number of filters, or rates out of
+    /// range; [`RecipeError::Dsp`] from the protocol, the filters or the interpolator.
+    pub fn new(
+        protocol: &Protocol,
+        wiring: &Wiring,
+        daq_rate_hz: f64,
+        tail_samples: usize,
+        filters: Option<&[KirkebyFilter]>,
+    ) -> Result<Self, RecipeError> {
+        let actuators = wiring.actuator_channels.len();
+        let shots = protocol.shots(actuators)?;
+        let first = shots.first().ok_or_else(|| RecipeError::Config("the protocol has no shot".into()))?;
+        let simultaneous = shots.iter().all(|s| s.delays_s == first.delays_s && s.gains.iter().all(|g| g.abs() == 1.0));
+        if !simultaneous {
+            return Err(RecipeError::Config(
+                "a simultaneous playback needs every actuator in every shot, signed +/-1, with the same delays".into(),
+            ));
+        }
+        if let Some(f) = filters
+            && f.len() != actuators
+        {
+            return Err(RecipeError::Config(format!("{} filters for {actuators} actuators", f.len())));
+        }
+        let delays: Vec<usize> = (0..actuators).map(|k| filters.map_or(0, |f| f[k].modelling_delay_samples)).collect();
+        let max_delay = delays.iter().copied().max().unwrap_or(0);
+        let total = protocol.shot_len_samples(actuators, daq_rate_hz) + max_delay + tail_samples;
+        let unit = unit_shot(first);
+        let mut drives_daq = Vec::with_capacity(actuators);
+        let mut drive_scales = Vec::with_capacity(actuators);
+        for k in 0..actuators {
+            let mut drive = vec![0.0; max_delay - delays[k]];
+            drive.extend(protocol.drive(&unit, k, daq_rate_hz)?.unwrap_or_default());
+            drive.resize(total, 0.0);
+            let mut drive = match filters {
+                Some(f) => {
+                    let mut filtered = f[k].apply(&drive)?;
+                    filtered.truncate(total);
+                    filtered
+                }
+                None => drive,
+            };
+            let scale = peak_scale(&drive);
+            drive.iter_mut().for_each(|v| *v *= scale);
+            drives_daq.push(drive);
+            drive_scales.push(scale);
+        }
+        let mut loopback = vec![0.0; max_delay];
+        loopback.extend(protocol.reference(daq_rate_hz)?);
+        loopback.resize(total, 0.0);
+        let loopback_scale = peak_scale(&loopback);
+        loopback.iter_mut().for_each(|v| *v *= loopback_scale);
+        let mut all: Vec<&[f64]> = drives_daq.iter().map(Vec::as_slice).collect();
+        all.push(&loopback);
+        let mut converted = to_audio_rate(&all, wiring, daq_rate_hz)?;
+        let loopback_audio = converted.pop().unwrap_or_default();
+        let drives = wiring.actuator_channels.iter().map(|&c| c as usize).zip(converted).collect();
+        Ok(Self {
+            channels: wiring.audio_channels as usize,
+            drives,
+            loopback: (wiring.loopback_channel as usize, loopback_audio),
+            signs: shots.iter().map(|s| s.gains.clone()).collect(),
+            response_gain: drive_scales.iter().map(|s| loopback_scale / s).collect(),
+            daq_len: total,
+        })
+    }
+
+    /// The audio buffers of shot `shot` (one per opened channel); `None` for a shot the protocol does not have.
+    pub fn buffers(&self, shot: usize) -> Option<Vec<Vec<f64>>> {
+        let signs = self.signs.get(shot)?;
+        let frames = self.loopback.1.len();
+        let mut out = vec![vec![0.0; frames]; self.channels];
+        for ((channel, drive), sign) in self.drives.iter().zip(signs) {
+            out.get_mut(*channel)?.iter_mut().zip(drive).for_each(|(o, d)| *o += sign * d);
+        }
+        out.get_mut(self.loopback.0)?.copy_from_slice(&self.loopback.1);
+        Some(out)
+    }
+}
+
+/// `shot` with every gain +1: each actuator's drive at sign +1, with the shot's delays.
+fn unit_shot(shot: &Shot) -> Shot {
+    Shot { gains: vec![1.0; shot.gains.len()], delays_s: shot.delays_s.clone() }
+}
+
+/// The scale that makes `signal` peak at [`DRIVE_PEAK_FS`], at most 1 (1 for silence).
+fn peak_scale(signal: &[f64]) -> f64 {
+    let peak = signal.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if peak > 0.0 { (DRIVE_PEAK_FS / peak).min(1.0) } else { 1.0 }
 }
 
 /// A playback at the audio rate: the two signals that are not silence, and where they go.

@@ -1,17 +1,20 @@
-//! Single-pixel focusing in closed form, as the analyses need it: the drive that focuses a band-limited impulse on
-//! one point, the transfer it achieves there, and snapshots of the focused field.
+//! Single-pixel focusing as the analyses need it: the drive that focuses a band-limited impulse on one point, the
+//! transfer it achieves there, and snapshots of the focused field.
 //!
 //! For one pixel `x0` with propagation vector `g(omega)` (1 x N actuators) both focusing laws drive
 //! `a(omega) = conj(g(omega)) c(omega) s(omega)`, `s` the target's spectrum and `c` a real, positive scale:
-//! - the Tikhonov-regularised inverse filter of the paper's Eq. (`a* = (g^H g + alpha^2)^-1 g^H s`, closed form for
-//!   one pixel): `c = 1 / (|g|^2 + alpha^2)`, with `alpha^2` = `relative_regularisation` times the band mean of
-//!   `|g|^2`, so that it scales with the plate;
-//! - time reversal: `c = 1 / mean(|g|^2)` (normalised so that the focus gain averages 1 over the band).
+//! - the Tikhonov-regularised inverse filter of the paper's Eq., solved by `metaplate-control`
+//!   ([`metaplate_control::solve::single_pixel_gain`], the one-pixel case of its SVD solver) with an absolute
+//!   `alpha^2` = `relative_regularisation` times the band mean of `|g|^2`, so that it scales with the plate:
+//!   `c = 1 / (|g|^2 + alpha^2)`;
+//! - time reversal: the matched filter `conj(g)` normalised to unit mean focus gain over the band,
+//!   `c = 1 / mean(|g|^2)`.
 //!
 //! The field at the pixel is then `v(x0, omega) = F(omega) s(omega)` with the focal transfer `F = |g|^2 c`, real and
 //! >= 0: the focused signal is the target passed through a zero-phase filter, symmetric about the focus time.
 
 use metaplate_control::PropagationMatrices;
+use metaplate_control::solve::{Regularisation, single_pixel_gain};
 use metaplate_dsp::band::BandLimit;
 use num_complex::Complex64;
 
@@ -98,22 +101,26 @@ pub fn focal_scale(
     if !(mean_norm > 0.0 && mean_norm.is_finite()) {
         return Err(AnalysisError::NoEnergy { what: "focusing (the pixel's response is zero)" });
     }
-    let scale = |n: f64| -> Result<f64, AnalysisError> {
-        match method {
-            FocusMethod::InverseFilter { relative_regularisation: beta } => {
-                if !(beta.is_finite() && beta >= 0.0) {
-                    return Err(AnalysisError::InvalidParameter {
-                        name: "relative_regularisation",
-                        reason: format!("must be finite and >= 0, got {beta}"),
-                    });
-                }
-                let d = n + beta * mean_norm;
-                Ok(if d > 0.0 { 1.0 / d } else { 0.0 })
+    // `None`: time reversal, whose scale is the band constant `1 / mean |g|^2`.
+    let inverse = match method {
+        FocusMethod::InverseFilter { relative_regularisation: beta } => {
+            if !(beta.is_finite() && beta >= 0.0) {
+                return Err(AnalysisError::InvalidParameter {
+                    name: "relative_regularisation",
+                    reason: format!("must be finite and >= 0, got {beta}"),
+                });
             }
-            FocusMethod::TimeReversal => Ok(1.0 / mean_norm),
+            Some(Regularisation::Absolute((beta * mean_norm).sqrt()))
         }
+        FocusMethod::TimeReversal => None,
     };
-    norms.iter().map(|&n| scale(n).map(|c| (c, n * c))).collect()
+    Ok(norms
+        .iter()
+        .map(|&n| {
+            let c = inverse.map_or(1.0 / mean_norm, |reg| single_pixel_gain(n, reg));
+            (c, n * c)
+        })
+        .collect())
 }
 
 /// The focused field at every point of `g` at time `tau_s` after the focus time, for a band-limited impulse target

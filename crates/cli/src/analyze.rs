@@ -38,7 +38,23 @@ pub struct AnalyzeArgs {
 
 /// Runs `metaplate analyze`.
 pub fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
-    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
+    let out = analyse_dataset(&args.data, args.figures.as_deref())?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        print_table(&out);
+    }
+    Ok(())
+}
+
+/// The whole analysis of the dataset in `data` as the JSON object `metaplate analyze --json` prints, with its
+/// figures written into `figures` when given (their paths under the key `figures`). `metaplate demo` calls this too.
+///
+/// # Errors
+/// An unreadable dataset, propagation matrices that cannot be built, a figure that cannot be written. An analysis
+/// that fails on this dataset is not an error: it is listed under `errors` and its value is null.
+pub fn analyse_dataset(data: &Path, figures: Option<&Path>) -> anyhow::Result<Value> {
+    let dataset = Dataset::open(data).with_context(|| format!("opening dataset {}", data.display()))?;
     let grid = dataset.manifest().meta.grid;
     let g = PropagationMatrices::from_dataset(&dataset, G_BAND_HZ, None).context("building G(omega)")?;
     let report = analyse(&g, &grid, &ReportOptions::default())?;
@@ -50,20 +66,15 @@ pub fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
     }
     let pixels = pixel_area_map(&g, &grid, &mask, &PixelAreaOptions::default());
     let mut out = to_json(&report, pixels.as_ref());
-    out["dataset"] = json!(args.data.display().to_string());
+    out["dataset"] = json!(data.display().to_string());
     out["scene"] = json!(dataset.manifest().meta.scene.name);
     out["points"] = json!(g.n_points());
     out["actuators"] = json!(g.n_actuators());
-    if let Some(dir) = &args.figures {
+    if let Some(dir) = figures {
         let written = write_figures(dir, &dataset.manifest().meta.scene.name, &g, &grid, &report, pixels.as_ref())?;
         out["figures"] = json!(written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
     }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&out)?);
-    } else {
-        print_table(&out);
-    }
-    Ok(())
+    Ok(out)
 }
 
 /// Domain edge as the JSON key, in cm with one decimal ("9.5").

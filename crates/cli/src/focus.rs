@@ -11,11 +11,10 @@
 //! predicted field up to the part of the responses that outlasts the padding. `--pad-s 0` writes one period for
 //! looped playback.
 //!
-//! Calibration (provisional, until the calibration recipe's dataset format exists): `--calibration DIR` reads
-//! `DIR/kirkeby.wav`, one channel per actuator in the dataset's actuator order, each channel the taps of that
-//! actuator's Kirkeby inverse filter at the dataset's sample rate. The drives are convolved with them (each channel
-//! grows by the filter length minus one); the predicted field is that of the uncompensated drives, since the
-//! Green's functions were measured through the calibrated actuators.
+//! Calibration: `--calibration DIR` reads the calibration dataset a `metaplate calibrate` run writes (recipes'
+//! `Calibration::load`: checksums verified, one Kirkeby inverse filter per actuator). The drives are convolved with
+//! the filters of the dataset's actuators (each channel grows by the filter length minus one); the predicted field
+//! is that of the uncompensated drives, since the Green's functions were measured through the calibrated actuators.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -23,12 +22,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_control::PropagationMatrices;
-use metaplate_control::render::{FocusOptions, compensate, normalise_peak, predicted_field, solve_drives};
+use metaplate_control::render::{
+    DriveSpectra, FocusOptions, compensate, normalise_peak, predicted_field, solve_drives,
+};
 use metaplate_control::solve::{Method, Regularisation};
 use metaplate_control::target::{PixelTarget, Waveform};
 use metaplate_core::grid::GridSpec;
 use metaplate_core::scene::Scene;
 use metaplate_dsp::kirkeby::KirkebyFilter;
+use metaplate_recipes::Calibration;
 use metaplate_store::Dataset;
 use serde_json::json;
 
@@ -40,7 +42,7 @@ pub struct FocusArgs {
     /// Dataset directory (a scan or `metaplate simulate greens`).
     #[arg(long)]
     data: PathBuf,
-    /// Calibration directory holding `kirkeby.wav` (one channel of inverse-filter taps per actuator; provisional).
+    /// Calibration dataset (what `metaplate calibrate` writes): the drives go through its Kirkeby filters.
     #[arg(long)]
     calibration: Option<PathBuf>,
     /// A pixel: `X_M,Y_M` in metres, optionally `:TARGET` with TARGET one of `impulse[@T]`, `impulses@T1,T2,..`,
@@ -58,14 +60,27 @@ pub struct FocusArgs {
     /// With --field, write the field at every measured point too (large: points x samples).
     #[arg(long)]
     field_all_points: bool,
+    /// How the drives are solved and laid out.
+    #[command(flatten)]
+    render: RenderOptions,
+}
+
+/// Default operating band, Hz (the paper's).
+const BAND_HZ: (f64, f64) = (75.0, 400.0);
+/// Default Tikhonov regularisation relative to the largest singular value.
+const ALPHA_RELATIVE: f64 = 0.01;
+
+/// How drives are solved and laid out (the options of `metaplate focus`; `metaplate demo` uses the defaults).
+#[derive(Args, Debug, Clone)]
+pub struct RenderOptions {
     /// Lower edge of the operating band, Hz.
-    #[arg(long, default_value_t = 75.0)]
+    #[arg(long, default_value_t = BAND_HZ.0)]
     band_lo_hz: f64,
     /// Upper edge of the operating band, Hz.
-    #[arg(long, default_value_t = 400.0)]
+    #[arg(long, default_value_t = BAND_HZ.1)]
     band_hi_hz: f64,
     /// Tikhonov regularisation relative to the largest singular value at each frequency.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = ALPHA_RELATIVE)]
     alpha_relative: f64,
     /// Time reversal instead of inverse filtering.
     #[arg(long)]
@@ -79,11 +94,28 @@ pub struct FocusArgs {
     focus_s: Option<f64>,
 }
 
-/// A parsed `--pixel`: position in metres and its waveform text.
-struct PixelSpec {
-    x_m: f64,
-    y_m: f64,
-    target: String,
+impl Default for RenderOptions {
+    /// The command line's defaults.
+    fn default() -> Self {
+        Self {
+            band_lo_hz: BAND_HZ.0,
+            band_hi_hz: BAND_HZ.1,
+            alpha_relative: ALPHA_RELATIVE,
+            time_reversal: false,
+            pad_s: None,
+            focus_s: None,
+        }
+    }
+}
+
+/// A parsed `--pixel`: position in metres and its waveform text (as `--pixel` takes it after the colon).
+pub struct PixelSpec {
+    /// x on the plate, m.
+    pub x_m: f64,
+    /// y on the plate, m.
+    pub y_m: f64,
+    /// The target waveform, `impulse` for an impulse at the focus time.
+    pub target: String,
 }
 
 fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
@@ -101,9 +133,11 @@ fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
 /// (same name and content hash), else the grid's bounds widened by half a spacing.
 fn on_plate(dataset: &Dataset) -> impl Fn(f64, f64) -> bool {
     let meta = &dataset.manifest().meta;
-    let scene = Scene::builtin(&meta.scene.name)
-        .ok()
-        .filter(|s| format!("{:016x}", s.content_hash()).eq_ignore_ascii_case(&meta.scene.hash));
+    let scene = Scene::builtin(&meta.scene.name).ok().filter(|s| {
+        // `simulate` writes the bare hex hash, the recipes prefix it with its algorithm.
+        let hash = meta.scene.hash.strip_prefix("fnv1a64:").unwrap_or(&meta.scene.hash);
+        format!("{:016x}", s.content_hash()).eq_ignore_ascii_case(hash)
+    });
     let grid = meta.grid;
     move |x_m, y_m| match &scene {
         Some(scene) => scene.plate.outline.contains(x_m, y_m),
@@ -158,41 +192,73 @@ fn dist2(a: (f64, f64), b: (f64, f64)) -> f64 {
     (a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)
 }
 
-/// Reads the provisional calibration: `DIR/kirkeby.wav`, one channel of taps per actuator.
-fn read_calibration(dir: &Path, n_actuators: usize, sample_rate_hz: f64) -> anyhow::Result<Vec<KirkebyFilter>> {
-    let path = dir.join("kirkeby.wav");
-    let (rate_hz, channels) = wav::read(&path)?;
-    if channels.len() != n_actuators {
-        bail!("{} has {} channels, the dataset {n_actuators} actuators", path.display(), channels.len());
-    }
-    if (rate_hz - sample_rate_hz).abs() > 1e-9 * sample_rate_hz {
-        bail!("{} is at {rate_hz} Hz, the dataset at {sample_rate_hz} Hz", path.display());
-    }
-    Ok(channels
-        .into_iter()
-        .map(|taps| KirkebyFilter { taps, sample_rate_hz, modelling_delay_samples: 0, max_boost_db: 0.0 })
-        .collect())
+/// Reads the calibration dataset in `dir` and returns the filters of `actuators` (the dataset's actuator numbers,
+/// in its column order), checking their sample rate against the dataset's.
+fn read_calibration(dir: &Path, actuators: &[u16], sample_rate_hz: f64) -> anyhow::Result<Vec<KirkebyFilter>> {
+    // Calibrations hold actuators 0..n: load as many as the highest the dataset uses.
+    let wired = actuators.iter().map(|&a| usize::from(a) + 1).max().unwrap_or(0);
+    let calibration =
+        Calibration::load(dir, wired).with_context(|| format!("reading the calibration {}", dir.display()))?;
+    actuators
+        .iter()
+        .map(|&a| {
+            let filter = calibration.filters.get(usize::from(a)).context("internal: calibration filter missing")?;
+            if (filter.sample_rate_hz - sample_rate_hz).abs() > 1e-9 * sample_rate_hz {
+                bail!(
+                    "the calibration {} is at {} Hz, the dataset at {sample_rate_hz} Hz",
+                    dir.display(),
+                    filter.sample_rate_hz
+                );
+            }
+            Ok(filter.clone())
+        })
+        .collect()
 }
 
-/// Runs `metaplate focus`.
-pub fn run(args: &FocusArgs) -> anyhow::Result<()> {
-    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
-    let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<anyhow::Result<_>>()?;
-    let on_plate = on_plate(&dataset);
-    let points: Vec<u32> = specs.iter().map(|s| snap(&dataset, s, &on_plate)).collect::<anyhow::Result<_>>()?;
+/// Drives rendered for a set of pixels: what `metaplate focus` writes, and what `metaplate demo` reports.
+pub struct Rendered {
+    /// The propagation matrices the drives were solved on (padded as [`RenderOptions::pad_s`] says).
+    pub g: PropagationMatrices,
+    /// The drive spectra (before compensation).
+    pub drives: DriveSpectra,
+    /// Each pixel's measured point (grid flat index).
+    pub points: Vec<u32>,
+    /// The signals to play, one per actuator: compensated when a calibration was given, peak-normalised to 1.
+    pub signals: Vec<Vec<f64>>,
+    /// Peak of the signals before normalisation (dataset drive units).
+    pub peak: f64,
+    /// The normalisation factor applied (0 when every target is null).
+    pub factor: f64,
+    /// Focus time of plain `impulse` targets, s.
+    pub focus_s: f64,
+    /// Zero padding used, s.
+    pub pad_s: f64,
+}
 
+/// Solves, compensates (with the calibration dataset in `calibration`, if any) and peak-normalises the drives that
+/// focus `specs` on the dataset's plate.
+///
+/// # Errors
+/// A pixel off the plate or in a gap of the scan, a bad target, options outside their range, an unreadable
+/// calibration, and the solver's errors.
+pub fn render(
+    dataset: &Dataset,
+    specs: &[PixelSpec],
+    calibration: Option<&Path>,
+    options: &RenderOptions,
+) -> anyhow::Result<Rendered> {
+    let on_plate = on_plate(dataset);
+    let points: Vec<u32> = specs.iter().map(|s| snap(dataset, s, &on_plate)).collect::<anyhow::Result<_>>()?;
     let fs = dataset.sample_rate_hz();
     let ir_len = dataset.ir_len();
-    let pad_s = args.pad_s.unwrap_or(ir_len as f64 / fs);
+    let pad_s = options.pad_s.unwrap_or(ir_len as f64 / fs);
     if !(pad_s.is_finite() && pad_s >= 0.0) {
         bail!("--pad-s must be finite and >= 0, got {pad_s}");
     }
     let fft_len = ir_len + (pad_s * fs).round() as usize;
-    let band = (args.band_lo_hz, args.band_hi_hz);
-    let g = PropagationMatrices::from_dataset_padded(&dataset, band, None, fft_len).context("building G(omega)")?;
-    let period_s = fft_len as f64 / fs;
-    let focus_s = args.focus_s.unwrap_or(period_s / 2.0);
-
+    let band = (options.band_lo_hz, options.band_hi_hz);
+    let g = PropagationMatrices::from_dataset_padded(dataset, band, None, fft_len).context("building G(omega)")?;
+    let focus_s = options.focus_s.unwrap_or(fft_len as f64 / fs / 2.0);
     let targets: Vec<PixelTarget> = specs
         .iter()
         .zip(&points)
@@ -205,43 +271,66 @@ pub fn run(args: &FocusArgs) -> anyhow::Result<()> {
             Ok(PixelTarget { point_index, waveform, amplitude: 1.0 })
         })
         .collect::<Result<_, metaplate_control::ControlError>>()?;
-    let method = if args.time_reversal { Method::TimeReversal } else { Method::InverseFilter };
-    let options = FocusOptions {
-        regularisation: Regularisation::Relative(args.alpha_relative),
+    let method = if options.time_reversal { Method::TimeReversal } else { Method::InverseFilter };
+    let focus = FocusOptions {
+        regularisation: Regularisation::Relative(options.alpha_relative),
         method,
         ..FocusOptions::default()
     };
-    let drives = solve_drives(&g, &targets, &options).context("solving the drives")?;
+    let drives = solve_drives(&g, &targets, &focus).context("solving the drives")?;
     let mut signals = drives.signals(&g)?;
-    if let Some(dir) = &args.calibration {
-        let filters = read_calibration(dir, g.n_actuators(), fs)?;
+    if let Some(dir) = calibration {
+        let filters = read_calibration(dir, g.actuators(), fs)?;
         signals = compensate(&signals, &filters)?;
     }
     let (peak, factor) = normalise_peak(&mut signals, 1.0)?;
-    wav::write_f32(&args.out, fs, &signals)?;
+    Ok(Rendered { g, drives, points, signals, peak, factor, focus_s, pad_s })
+}
+
+/// Runs `metaplate focus`.
+pub fn run(args: &FocusArgs) -> anyhow::Result<()> {
+    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
+    let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<anyhow::Result<_>>()?;
+    let r = render(&dataset, &specs, args.calibration.as_deref(), &args.render)?;
+    let fs = dataset.sample_rate_hz();
+    let samples = r.signals.first().map_or(0, Vec::len);
+    wav::write_f32(&args.out, fs, &r.signals)?;
     println!(
-        "wrote {}: {} channels x {} samples at {fs} Hz ({:.3} s; focus time {focus_s:.4} s; {})",
+        "wrote {}: {} channels x {samples} samples at {fs} Hz ({:.3} s; focus time {:.4} s; {})",
         args.out.display(),
-        signals.len(),
-        signals.first().map_or(0, Vec::len),
-        signals.first().map_or(0, Vec::len) as f64 / fs,
-        if pad_s > 0.0 { "for one-shot playback" } else { "one period, loop it" }
+        r.signals.len(),
+        samples as f64 / fs,
+        r.focus_s,
+        if r.pad_s > 0.0 { "for one-shot playback" } else { "one period, loop it" }
     );
-    println!("peak drive {peak:.6e} (dataset drive units), normalisation factor {factor:.6e}");
-    if factor == 0.0 {
+    println!("peak drive {:.6e} (dataset drive units), normalisation factor {:.6e}", r.peak, r.factor);
+    if r.factor == 0.0 {
         println!("every target is null: the drives are silent");
     }
     if let Some(path) = &args.field {
-        let rows: Vec<usize> = points
-            .iter()
-            .map(|&p| g.row_of(p).context("internal: pixel not among the rows"))
-            .collect::<Result<_, _>>()?;
-        let at_pixels = predicted_field(&g, &drives, Some(&rows), factor)?;
-        let everywhere = if args.field_all_points { Some(predicted_field(&g, &drives, None, factor)?) } else { None };
-        write_field(path, fs, &specs, &points, &at_pixels, g.points(), everywhere.as_deref())?;
+        let at_pixels = r.field_at_pixels()?;
+        let everywhere =
+            if args.field_all_points { Some(predicted_field(&r.g, &r.drives, None, r.factor)?) } else { None };
+        write_field(path, fs, &specs, &r.points, &at_pixels, r.g.points(), everywhere.as_deref())?;
         println!("wrote the predicted field to {}", path.display());
     }
     Ok(())
+}
+
+impl Rendered {
+    /// The predicted field at each pixel over one period, in the dataset's units per drive unit times the
+    /// normalisation (so per full scale of the written signals).
+    ///
+    /// # Errors
+    /// As [`predicted_field`].
+    pub fn field_at_pixels(&self) -> anyhow::Result<Vec<Vec<f64>>> {
+        let rows: Vec<usize> = self
+            .points
+            .iter()
+            .map(|&p| self.g.row_of(p).context("internal: pixel not among the rows"))
+            .collect::<Result<_, _>>()?;
+        Ok(predicted_field(&self.g, &self.drives, Some(&rows), self.factor)?)
+    }
 }
 
 /// Writes the predicted field: CSV (`t_s` then one column per pixel, then per point with --field-all-points) when

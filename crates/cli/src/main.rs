@@ -5,14 +5,19 @@
 use clap::{Parser, Subcommand};
 
 mod analyze;
+mod calibrate;
 mod deconvolve;
 mod demo;
 mod focus;
 mod progress;
 mod replay;
+mod rig;
+mod run;
+mod scan;
 mod scene;
 mod simulate;
 mod sweep;
+mod tradeoff;
 mod wav;
 
 #[derive(Parser)]
@@ -45,6 +50,17 @@ enum Command {
     /// Replay a recorded device session (cassette) through its driver, optionally with faults; or record one
     /// against a mock device (--record-mock).
     Replay(replay::ReplayArgs),
+    /// Calibrate the actuators (mock lab or real hardware): per actuator a sweep on its magnet, a Kirkeby inverse
+    /// filter and a verification through it; one commit per actuator; resumable (--resume).
+    Calibrate(calibrate::CalibrateArgs),
+    /// Scan the grid (mock lab or real hardware): every point, every actuator, the compensated excitation,
+    /// deconvolution and quality gates; one commit per point; Ctrl-C and crash safe, resumable (--resume).
+    Scan(scan::ScanArgs),
+    /// Measure the scan protocols' speed/accuracy trade on the mock lab: time per point, full-scan hours, error
+    /// against the ground truth, pixel area (JSON with --json, the Pareto plot with --figures DIR). Protocol
+    /// names: paper | quick | sequential:DxR | sequential-exp:DxR | hadamard:DxR | interleaved:D |
+    /// adaptive:DxR@SNR[/ROUNDS].
+    Tradeoff(tradeoff::TradeoffArgs),
     /// The simulated plate's ground truth: dispersion, Green's functions.
     Simulate {
         #[command(subcommand)]
@@ -62,6 +78,9 @@ fn main() -> anyhow::Result<()> {
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Replay(args) => replay::run(&args),
+        Command::Tradeoff(args) => tradeoff::run(&args),
         Command::Simulate { command } => simulate::run(&command),
+        Command::Calibrate(args) => calibrate::run(&args),
+        Command::Scan(args) => scan::run(&args),
     }
 }

@@ -20,3 +20,15 @@ pub fn spinner(message: String) -> ProgressBar {
     spinner.enable_steady_tick(std::time::Duration::from_millis(200));
     spinner
 }
+
+/// A bar for a measurement run of `len` units, `done` of them already committed (resume): `label` before the bar,
+/// and a message after it (rate, ETA on the rig's clock, SNR) that the caller keeps current.
+pub fn run_bar(len: u64, done: u64, label: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template("{prefix:>10} [{bar:40}] {pos}/{len} {msg}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_prefix(label.to_string());
+    bar.set_position(done);
+    bar
+}

@@ -1,4 +1,5 @@
-//! `metaplate focus` end to end on a small ground-truth dataset (13 x 7 points of the metamaterial plate).
+//! `metaplate focus` end to end on a small ground-truth dataset (13 x 7 points of the metamaterial plate), with and
+//! without a calibration made by the calibration recipe on the mock lab.
 
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
@@ -80,6 +81,88 @@ fn focus_writes_a_normalised_eight_channel_drive_and_refuses_bad_pixels() {
     let argmax = v[0].iter().enumerate().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())).unwrap().0;
     // Within 2 samples of half the period (24 kHz: 83 us; the band-limited impulse's peak is one sample wide).
     assert!(argmax.abs_diff(v[0].len() / 2) <= 2, "impulse peak at sample {argmax} of {}", v[0].len());
+}
+
+/// A calibration of the metamaterial plate's 8 actuators by the calibration recipe on the mock lab (only the
+/// actuators' driving points prepared; Green's functions cached under the target directory).
+fn calibration(dir: &Path) -> PathBuf {
+    use metaplate_core::scene::Scene;
+    use metaplate_lab::{LabOptions, MockLab};
+    use metaplate_recipes::{CalibrationConfig, Output, RunControl, Silent, calibrate};
+
+    let scene = Scene::builtin("metamaterial").unwrap();
+    let n = scene.actuators.len();
+    let options = LabOptions {
+        points: Some((0..n).map(|k| scene.grid.len() + k).collect()),
+        cache_dir: Some(Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache")),
+        ..LabOptions::default()
+    };
+    let lab = MockLab::new(&scene, &options).unwrap();
+    let mut rig = lab.rig().unwrap();
+    let out = Output {
+        dir: dir.join("calibration"),
+        scene: metaplate_store::SceneId { name: scene.name.clone(), hash: format!("{:016x}", scene.content_hash()) },
+        software_version: "test".into(),
+        resume: false,
+        force: false,
+    };
+    let sites: Vec<(f64, f64)> = scene.actuators.iter().map(|a| (a.x_m, a.y_m)).collect();
+    calibrate(&mut rig, &sites, &CalibrationConfig::default(), &out, &RunControl::new(), &mut Silent).unwrap();
+    out.dir
+}
+
+/// `metaplate focus` of an impulse at the plate centre, with `calibration` if given, into `wav`.
+fn focus_at_centre(data: &Path, calibration: Option<&Path>, wav: &Path) -> Output {
+    let mut args = vec!["focus", "--data", data.to_str().unwrap(), "--pixel", "0,0", "--out", wav.to_str().unwrap()];
+    if let Some(dir) = calibration {
+        args.extend(["--calibration", dir.to_str().unwrap()]);
+    }
+    metaplate(&args)
+}
+
+fn wav_channels(path: &Path) -> Vec<Vec<f32>> {
+    let mut reader = hound::WavReader::open(path).unwrap();
+    let channels = usize::from(reader.spec().channels);
+    let samples: Vec<f32> = reader.samples::<f32>().map(Result::unwrap).collect();
+    (0..channels).map(|c| samples.iter().skip(c).step_by(channels).copied().collect()).collect()
+}
+
+#[test]
+fn focus_applies_a_recipe_calibration_and_refuses_a_dataset_that_is_not_one() {
+    let dir = scratch("calibrated");
+    let data = dataset(&dir);
+    let cal = calibration(&dir);
+    let (plain, compensated) = (dir.join("plain.wav"), dir.join("compensated.wav"));
+    for (wav, calibration) in [(&plain, None), (&compensated, Some(cal.as_path()))] {
+        let out = focus_at_centre(&data, calibration, wav);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let calibration = metaplate_recipes::Calibration::load(&cal, 8).unwrap();
+    let (plain, compensated) = (wav_channels(&plain), wav_channels(&compensated));
+    assert_eq!(compensated.len(), 8);
+    for (a, (p, c)) in plain.iter().zip(&compensated).enumerate() {
+        // Convolution with the actuator's filter: the channel grows by the filter length minus one.
+        assert_eq!(c.len(), p.len() + calibration.filters[a].taps.len() - 1, "actuator {a}");
+    }
+    let peak = compensated.iter().flatten().fold(0.0_f32, |m, v| m.max(v.abs()));
+    // Peak-normalised after compensation: within one f32 ulp of 1.
+    assert!(peak <= 1.0 && peak > 1.0 - 1e-6, "peak {peak}");
+    // The compensated drive is not the plain one rescaled: the filters shape it (relative difference well above
+    // f32 rounding, 1e-7, after matching the scale by least squares on the common part).
+    let (p0, c0) = (&plain[0], &compensated[0]);
+    let scale = p0.iter().zip(c0).map(|(p, c)| f64::from(*p) * f64::from(*c)).sum::<f64>()
+        / p0.iter().map(|p| f64::from(*p).powi(2)).sum::<f64>();
+    let residual: f64 = p0.iter().zip(c0).map(|(p, c)| (f64::from(*c) - scale * f64::from(*p)).powi(2)).sum();
+    let energy: f64 = c0.iter().map(|c| f64::from(*c).powi(2)).sum();
+    assert!(residual / energy > 1e-3, "compensation changed nothing: {}", residual / energy);
+
+    // The ground-truth dataset is not a calibration: a clear error, no panic, no output.
+    let bad = dir.join("bad.wav");
+    let out = focus_at_centre(&data, Some(&data), &bad);
+    assert!(!out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("not a calibration") && !err.contains("panicked"), "{err}");
+    assert!(!bad.exists());
 }
 
 #[test]

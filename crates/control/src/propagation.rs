@@ -261,6 +261,22 @@ impl PropagationMatrices {
         self.points.iter().position(|&p| p == point_index)
     }
 
+    /// The same matrices with their rows relabelled as the grid points `points` (for another grid, e.g. a coarser
+    /// lattice through the same points).
+    ///
+    /// # Errors
+    /// [`ControlError::LengthMismatch`] unless `points` has one label per row.
+    pub fn with_points(&self, points: Vec<u32>) -> Result<Self, ControlError> {
+        if points.len() != self.points.len() {
+            return Err(ControlError::LengthMismatch {
+                what: "new point labels against rows",
+                a: points.len(),
+                b: self.points.len(),
+            });
+        }
+        Ok(Self { points, ..self.clone() })
+    }
+
     /// The sub-matrices for the rows `rows` (positions into [`Self::points`], any order, duplicates allowed).
     ///
     /// # Errors

@@ -161,3 +161,30 @@ pub fn single_pixel_gain(g_norm_sqr: f64, reg: Regularisation) -> f64 {
     let denom = g_norm_sqr + alpha * alpha;
     if denom > 0.0 { 1.0 / denom } else { 0.0 }
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
+
+    use super::*;
+    use faer::Mat;
+
+    /// The closed form is the SVD solver's one-pixel case: `a = conj(g) v single_pixel_gain(|g|^2)`.
+    #[test]
+    fn single_pixel_gain_is_the_svd_solution_for_one_pixel() {
+        let row = [Complex64::new(0.3, -1.2), Complex64::new(-2.0, 0.5), Complex64::new(1e-3, 0.0)];
+        let g = Mat::from_fn(1, row.len(), |_, j| row[j]);
+        let norm_sqr: f64 = row.iter().map(|z| z.norm_sqr()).sum();
+        let v = Complex64::new(0.7, 0.2);
+        for reg in [Regularisation::Absolute(0.0), Regularisation::Absolute(0.8), Regularisation::Relative(0.1)] {
+            let a = solve_bin(g.as_ref(), &[v], reg, Method::InverseFilter).unwrap();
+            let c = single_pixel_gain(norm_sqr, reg);
+            for (aj, gj) in a.iter().zip(&row) {
+                // Two routes through double-precision arithmetic on O(1) numbers: 1e-12 relative is ~1e4 ulp.
+                assert!((aj - gj.conj() * v * c).norm() <= 1e-12 * aj.norm().max(1e-300), "{reg:?}: {aj} vs {c}");
+            }
+        }
+        // A zero row: zero gain, as the SVD path gives a zero drive.
+        assert_eq!(single_pixel_gain(0.0, Regularisation::Absolute(0.0)), 0.0);
+    }
+}

@@ -20,6 +20,7 @@ pub mod kirkeby;
 pub mod pipeline;
 pub mod protocol;
 pub mod resample;
+pub mod smooth;
 pub mod sweep;
 pub mod window;
 

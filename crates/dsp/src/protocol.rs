@@ -11,7 +11,7 @@
 //! |---|---|---|
 //! | [`Protocol::Sequential`] (the paper's, with a linear sweep) | one per actuator, the others silent | none beyond the per-channel pipeline's: responses shorter than one period |
 //! | [`Protocol::Hadamard`] | `N` (the power of two `>= actuators`), all actuators at once with the signs of row `s` of the Sylvester Hadamard matrix | linearity and superposition (the actuators' responses add at the plate); distortion of one actuator leaks into the others' responses as noise |
-//! | [`Protocol::Interleaved`] (multiple exponential sweeps) | one: all actuators play one exponential sweep, actuator `k` delayed by `k * slot_s` | linearity; the response plus the harmonics' advance `L ln 3` fit in one slot |
+//! | [`Protocol::Interleaved`] (multiple exponential sweeps) | one: all actuators play one exponential sweep, actuator `k` delayed by `k * slot_s` | linearity; the response plus the harmonics' advance `L ln 3` fit in one slot; player and recorder on one clock (no drift estimate: a drift `d` moves actuator `k`'s response by `k slot_s d`) |
 //!
 //! Energy: with the same sweep and repetitions, each actuator gets as much excitation energy in a Hadamard scan as
 //! in a sequential one, and every shot measures all of them: `N` shots of `N` actuators instead of `N` shots of
@@ -93,7 +93,8 @@ impl Protocol {
 
     /// Checks the protocol for `actuators` actuators and responses of `ir_len_s` seconds.
     ///
-    /// Valid range: `1 <= actuators <= MAX_ACTUATORS`; a valid sweep; `repetitions >= 1`; for
+    /// Valid range: `1 <= actuators <= MAX_ACTUATORS`; a valid sweep; `repetitions >= 1`; for sequential and
+    /// Hadamard protocols a response shorter than the sweep's period (`ir_len_s < duration_s`); for
     /// [`Protocol::Interleaved`] an exponential sweep and `slot_s >= ir_len_s + L ln 3` (`L` the sweep's rate), so
     /// that every actuator's response, and the second and third harmonics of the next one, stay out of each other's
     /// windows.
@@ -108,6 +109,15 @@ impl Protocol {
         self.sweep().validate()?;
         if self.repetitions() == 0 {
             return invalid("repetitions", "must be at least 1".into());
+        }
+        if let Protocol::Sequential { sweep, .. } | Protocol::Hadamard { sweep, .. } = self
+            && (ir_len_s.is_nan() || ir_len_s >= sweep.duration_s)
+        {
+            // The periodic deconvolution wraps a response longer than the period onto its own start.
+            return invalid(
+                "ir_len_s",
+                format!("a {ir_len_s} s response does not fit the sweep's {} s period", sweep.duration_s),
+            );
         }
         if let Protocol::Interleaved { sweep, slot_s } = self {
             let Some(rate_s) = sweep.exp_rate_s() else {

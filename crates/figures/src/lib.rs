@@ -11,6 +11,7 @@ mod colour;
 mod maps;
 mod plots;
 mod render;
+mod tradeoff;
 
 pub use maps::{focus_snapshots, pixel_area_map};
 pub use plots::{
@@ -18,3 +19,4 @@ pub use plots::{
     singular_value_energy, wavelength,
 };
 pub use render::{FigureError, Written};
+pub use tradeoff::{TradeoffPoint, tradeoff};

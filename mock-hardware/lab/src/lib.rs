@@ -76,9 +76,12 @@
 //! - Over a pseudo-terminal, LDV timeouts cost wall time (the real port waits) and no virtual time, and a disconnect
 //!   is seen as a timeout (see `PtyServer`).
 
+mod accuracy;
 mod chain;
 mod links;
 pub mod session;
+
+pub use accuracy::ERROR_BAND_HZ;
 
 use std::f64::consts::PI;
 use std::path::PathBuf;

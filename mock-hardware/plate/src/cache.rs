@@ -45,13 +45,17 @@ pub fn cache_path(dir: &Path, scene_hash: u64, key: u64) -> PathBuf {
 ///
 /// # Errors
 /// As [`PlateModel::from_scene`] and [`PlateModel::greens_functions`]; [`PlateError::Cache`] when the cache
-/// directory cannot be read or written.
+/// directory cannot be created (it is created with its parents when missing), read or written.
 pub fn greens_functions(
     scene: &Scene,
     options: &ModelOptions,
     request: &GreensRequest,
     cache_dir: Option<&Path>,
 ) -> Result<GreensFunctions, PlateError> {
+    if let Some(dir) = cache_dir {
+        // Before the computation, so that an unusable directory fails at once rather than after it.
+        ensure_dir(dir)?;
+    }
     let scene_hash = scene.content_hash();
     let path = cache_dir.map(|dir| cache_path(dir, scene_hash, cache_key(scene_hash, options, request)));
     if let Some(path) = &path
@@ -64,6 +68,14 @@ pub fn greens_functions(
         store(path, cache_key(scene_hash, options, request), &greens)?;
     }
     Ok(greens)
+}
+
+/// Creates the cache directory (and its parents) when it does not exist.
+fn ensure_dir(dir: &Path) -> Result<(), PlateError> {
+    fs::create_dir_all(dir).map_err(|e| PlateError::Cache {
+        path: dir.display().to_string(),
+        reason: format!("cannot create the cache directory: {e}"),
+    })
 }
 
 fn cache_error(path: &Path, e: impl ToString) -> PlateError {
@@ -129,4 +141,41 @@ fn store(path: &Path, key: u64, g: &GreensFunctions) -> Result<(), PlateError> {
         let _ = fs::remove_file(&tmp);
         cache_error(path, e)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
+
+    use super::*;
+
+    /// A fresh scratch directory (no tempfile dependency in this crate).
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("metaplate-plate-cache-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_missing_cache_directory_is_created_with_its_parents() {
+        let root = scratch("create");
+        let dir = root.join("a").join("b");
+        ensure_dir(&dir).unwrap();
+        assert!(dir.is_dir());
+        // Existing already: still fine.
+        ensure_dir(&dir).unwrap();
+        fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn a_cache_directory_that_cannot_be_created_is_a_clear_error() {
+        let root = scratch("refuse");
+        let file = root.join("file");
+        fs::write(&file, b"x").unwrap();
+        let err = ensure_dir(&file.join("cache")).unwrap_err();
+        let text = err.to_string();
+        assert!(text.contains("cannot create the cache directory") && text.contains("file/cache"), "{text}");
+        fs::remove_dir_all(&root).unwrap();
+    }
 }

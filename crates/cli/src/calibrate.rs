@@ -1,0 +1,59 @@
+//! `metaplate calibrate`: per actuator, the beam on its magnet, the calibration sweep, the Kirkeby inverse filter
+//! and a verification through it; one commit per actuator, resumable.
+
+use clap::Args;
+use metaplate_recipes::{CalibrationConfig, RunControl, calibrate};
+
+use crate::rig::{self, Plate};
+use crate::run::{self, Reporter, RunArgs};
+
+/// Arguments of `metaplate calibrate`.
+///
+/// Writes a calibration dataset into --out (one row per actuator for the filter taps, the measured response and
+/// the verification response), logs to `OUT/calibrate.log`, and shows a progress bar (or --json events). Ctrl-C
+/// stops after the actuator in flight (twice: abandons it) and prints the command that resumes; the exit code is
+/// then 130.
+#[derive(Args, Debug)]
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// Runs `metaplate calibrate`.
+pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
+    let common = &args.run;
+    run::init_log(&common.out, "calibrate")?;
+    let (plate, mut rig, _lab) = match (&common.source.scene, &common.source.hardware) {
+        (_, Some(file)) => {
+            let (plate, rig) = rig::hardware_rig(file)?;
+            (plate, rig, None)
+        }
+        (Some(scene), None) => {
+            let plate = Plate::resolve(scene)?;
+            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), common.seed, common.cache_dir.clone())?;
+            (plate, rig, Some(lab))
+        }
+        (None, None) => anyhow::bail!("give --scene or --hardware"),
+    };
+    let config = CalibrationConfig { seed: common.seed.unwrap_or(plate.scene.seed), ..CalibrationConfig::default() };
+    let control = RunControl::new();
+    let mut reporter = Reporter::new("calibrate", "actuators", common.json);
+    run::handle_ctrl_c(&control, reporter.bar())?;
+    let sites = plate.actuator_sites_m();
+    let result = calibrate(&mut rig, &sites, &config, &common.output(plate.id.clone()), &control, &mut reporter);
+    let results = run::conclude(result, common)?;
+    if !common.json {
+        for r in &results {
+            eprintln!(
+                "actuator {}: {} (flat within {:.2} dB, {} attempt(s), boost {:.1} dB)",
+                r.actuator,
+                r.status.as_str(),
+                r.flatness.deviation_db(),
+                r.attempts,
+                r.filter.max_boost_db
+            );
+        }
+        eprintln!("calibration written to {}", common.out.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,330 @@
+//! What `metaplate calibrate` and `metaplate scan` share: their common options, the log file in the run directory,
+//! progress (a bar, or `--json` events on stdout), Ctrl-C, and how a run that stops early ends (the resume command,
+//! exit code 130 for an interrupt).
+
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use anyhow::Context;
+use clap::Args;
+use indicatif::ProgressBar;
+use metaplate_recipes::{Event, Observer, Output, RecipeError, RunControl};
+use metaplate_store::{MANIFEST_FILE, SceneId, StoreError};
+use serde_json::{Value, json};
+
+use crate::progress;
+
+/// Exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
+pub const EXIT_INTERRUPTED: i32 = 130;
+
+/// Where the instruments come from: exactly one of `--scene` and `--hardware`.
+#[derive(Args, Debug, Clone)]
+#[group(required = true, multiple = false)]
+pub struct Source {
+    /// Run on the mock lab of this scene: a built-in name (`metaplate scene list`) or a scene file. The mock lab
+    /// runs the real drivers on a virtual clock, so hours of measurement take minutes.
+    #[arg(long)]
+    pub scene: Option<String>,
+    /// Run on the real instruments named in this hardware file (format: `crates/cli/hardware.example.toml`).
+    #[arg(long)]
+    pub hardware: Option<PathBuf>,
+}
+
+/// Options every measurement run takes.
+#[derive(Args, Debug, Clone)]
+pub struct RunArgs {
+    #[command(flatten)]
+    pub source: Source,
+    /// Dataset directory to write. It must be empty or absent, unless --resume.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Continue the run already in --out after the last committed unit (after Ctrl-C, a crash or a power cut).
+    /// The configuration must be the same as the first run's; committed files are verified and a corrupt one is
+    /// quarantined and measured again.
+    #[arg(long)]
+    pub resume: bool,
+    /// With --resume: continue even though the configuration differs from the dataset's (the differences are
+    /// still reported, and journaled).
+    #[arg(long, requires = "resume")]
+    pub force: bool,
+    /// Seed of every random choice (beam nudges; in the mock lab also noise, speckle and dropouts). Default: the
+    /// scene's seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Print one JSON object per progress event on stdout (`{"event": "committed", ...}`), for unattended runs;
+    /// the last one is `finished` or `stopped`.
+    #[arg(long)]
+    pub json: bool,
+    /// Mock lab only: directory caching the plate's Green's functions (keyed by scene and request), so that later
+    /// runs start at once.
+    #[arg(long)]
+    pub cache_dir: Option<PathBuf>,
+}
+
+impl RunArgs {
+    /// The recipe's output for `scene`.
+    pub fn output(&self, scene: SceneId) -> Output {
+        Output {
+            dir: self.out.clone(),
+            scene,
+            software_version: env!("CARGO_PKG_VERSION").to_string(),
+            resume: self.resume,
+            force: self.force,
+        }
+    }
+}
+
+/// A log file that is created only once the dataset exists: the store refuses to create a dataset in a directory
+/// that holds anything, so lines logged before that are kept in memory and written out when `manifest.json`
+/// appears (and dropped if the run fails before).
+struct DeferredLog {
+    path: PathBuf,
+    manifest: PathBuf,
+    pending: Vec<u8>,
+    file: Option<File>,
+}
+
+impl Write for DeferredLog {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.file.is_none() {
+            if !self.manifest.exists() {
+                self.pending.extend_from_slice(buf);
+                return Ok(buf.len());
+            }
+            let mut file = OpenOptions::new().create(true).append(true).open(&self.path)?;
+            file.write_all(&self.pending)?;
+            self.pending.clear();
+            self.file = Some(file);
+        }
+        match &mut self.file {
+            Some(file) => file.write(buf),
+            None => Ok(buf.len()),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.as_mut().map_or(Ok(()), Write::flush)
+    }
+}
+
+/// Sends `tracing` events (info and above, no colour codes) to `DIR/<recipe>.log`, appended on resume.
+///
+/// # Errors
+/// When a global subscriber is already installed.
+pub fn init_log(dir: &Path, recipe: &str) -> anyhow::Result<()> {
+    let log = DeferredLog {
+        path: dir.join(format!("{recipe}.log")),
+        manifest: dir.join(MANIFEST_FILE),
+        pending: Vec::new(),
+        file: None,
+    };
+    tracing_subscriber::fmt()
+        .with_writer(Mutex::new(log))
+        .with_ansi(false)
+        .with_max_level(tracing::Level::INFO)
+        .try_init()
+        .map_err(|e| anyhow::anyhow!("cannot set up the log: {e}"))
+}
+
+/// Installs the Ctrl-C handler: the first press asks `control` to stop after the current point, the second to
+/// abandon it. Messages go to stderr, above `bar` when there is one.
+///
+/// # Errors
+/// When a handler is already installed.
+pub fn handle_ctrl_c(control: &RunControl, bar: Option<ProgressBar>) -> anyhow::Result<()> {
+    let control = control.clone();
+    ctrlc::set_handler(move || {
+        let message = match control.request_stop() {
+            1 => "stopping after the current point (Ctrl-C again to abandon it)",
+            _ => "abandoning the current point; nothing of it is committed",
+        };
+        match &bar {
+            Some(bar) => bar.suspend(|| eprintln!("{message}")),
+            None => eprintln!("{message}"),
+        }
+    })
+    .context("cannot install the Ctrl-C handler")
+}
+
+/// How progress is shown.
+enum Display {
+    /// An indicatif bar on stderr (hidden when stderr is not a terminal), created at `Started`.
+    Bar(Option<ProgressBar>),
+    /// One JSON object per event on stdout.
+    Json,
+}
+
+/// The recipe's observer: logs every event, and shows progress as a bar or as JSON lines.
+pub struct Reporter {
+    recipe: &'static str,
+    unit: &'static str,
+    display: Display,
+    /// Units committed before this run (resume), for the rate.
+    done_at_start: usize,
+    /// The bar, shared with the Ctrl-C handler.
+    shared_bar: ProgressBar,
+}
+
+impl Reporter {
+    /// A reporter for `recipe` (`scan`, `calibrate`) counting `unit`s (`points`, `actuators`), as JSON lines when
+    /// `json`.
+    pub fn new(recipe: &'static str, unit: &'static str, json: bool) -> Self {
+        let shared_bar = progress::run_bar(0, 0, recipe);
+        let display = if json { Display::Json } else { Display::Bar(None) };
+        Self { recipe, unit, display, done_at_start: 0, shared_bar }
+    }
+
+    /// The bar (for the Ctrl-C handler's messages), when progress is shown as a bar.
+    pub fn bar(&self) -> Option<ProgressBar> {
+        matches!(self.display, Display::Bar(_)).then(|| self.shared_bar.clone())
+    }
+
+    /// Rate (units per hour) and ETA (hours) on the rig's clock, once this run has committed something.
+    fn rate_and_eta(&self, done: usize, total: usize, clock_s: f64) -> Option<(f64, f64)> {
+        let now = done.checked_sub(self.done_at_start).filter(|n| *n > 0)?;
+        if !(clock_s.is_finite() && clock_s > 0.0) {
+            return None;
+        }
+        let per_hour = now as f64 / clock_s * 3600.0;
+        Some((per_hour, total.saturating_sub(done) as f64 / per_hour))
+    }
+
+    fn log(&self, event: &Event) {
+        match event {
+            Event::Started { total, done } => tracing::info!(total, done, "{} started", self.recipe),
+            Event::Committed { unit, done, total, snr_db, status, clock_s } => {
+                tracing::info!(unit, done, total, ?snr_db, status = %status, clock_s, "committed")
+            }
+            Event::Retry { unit, attempt, reason } => tracing::info!(unit, attempt, %reason, "retry"),
+            Event::Recovered { detail } => tracing::warn!(%detail, "recovered"),
+            Event::Paused { detail } => tracing::warn!(%detail, "paused, polling"),
+            Event::ReferenceChecked { point, actuator, deviation_db, limit_db } => {
+                tracing::info!(point, actuator, deviation_db, limit_db, "reference point re-measured")
+            }
+            Event::Stopped { done } => tracing::info!(done, "stopped on request"),
+            Event::Finished { done } => tracing::info!(done, "finished"),
+        }
+    }
+
+    fn json(&self, event: &Event) -> Value {
+        let mut value = match event {
+            Event::Started { total, done } => json!({ "event": "started", "total": total, "done": done }),
+            Event::Committed { unit, done, total, snr_db, status, clock_s } => {
+                let (rate, eta) = self.rate_and_eta(*done, *total, *clock_s).unzip();
+                json!({ "event": "committed", "unit": unit, "done": done, "total": total, "snr_db": snr_db,
+                        "status": status, "clock_s": clock_s, "rate_per_hour": rate, "eta_h": eta })
+            }
+            Event::Retry { unit, attempt, reason } => {
+                json!({ "event": "retry", "unit": unit, "attempt": attempt, "reason": reason })
+            }
+            Event::Recovered { detail } => json!({ "event": "recovered", "detail": detail }),
+            Event::Paused { detail } => json!({ "event": "paused", "detail": detail }),
+            Event::ReferenceChecked { point, actuator, deviation_db, limit_db } => {
+                json!({ "event": "reference_checked", "point": point, "actuator": actuator,
+                        "deviation_db": deviation_db, "limit_db": limit_db })
+            }
+            Event::Stopped { done } => json!({ "event": "stopped", "done": done }),
+            Event::Finished { done } => json!({ "event": "finished", "done": done }),
+        };
+        if let Value::Object(map) = &mut value {
+            map.insert("recipe".into(), json!(self.recipe));
+            map.insert("unit_kind".into(), json!(self.unit));
+        }
+        value
+    }
+
+    fn show(&mut self, event: &Event) {
+        let Display::Bar(slot) = &mut self.display else { return };
+        match event {
+            Event::Started { total, done } => {
+                self.shared_bar.set_length(*total as u64);
+                self.shared_bar.set_position(*done as u64);
+                self.shared_bar.set_message(self.unit.to_string());
+                *slot = Some(self.shared_bar.clone());
+            }
+            Event::Committed { done, total, snr_db, clock_s, .. } => {
+                let mut message = match self.rate_and_eta(*done, *total, *clock_s) {
+                    Some((rate, eta)) => format!("{rate:.1} {}/h, ETA {eta:.2} h", self.unit),
+                    None => self.unit.to_string(),
+                };
+                if let Some(snr) = snr_db {
+                    message.push_str(&format!(", SNR {snr:.1} dB"));
+                }
+                self.shared_bar.set_position(*done as u64);
+                self.shared_bar.set_message(message);
+            }
+            Event::Recovered { detail } | Event::Paused { detail } => {
+                let detail = detail.clone();
+                self.shared_bar.suspend(|| eprintln!("{detail}"));
+            }
+            Event::Retry { .. } | Event::ReferenceChecked { .. } => {}
+            Event::Stopped { .. } | Event::Finished { .. } => self.shared_bar.finish(),
+        }
+    }
+}
+
+impl Observer for Reporter {
+    fn event(&mut self, event: &Event) {
+        self.log(event);
+        if let Event::Started { done, .. } = event {
+            self.done_at_start = *done;
+        }
+        if matches!(self.display, Display::Json) {
+            let line = self.json(event).to_string();
+            let mut out = std::io::stdout().lock();
+            // A closed stdout must not stop a measurement: the dataset and the log still record everything.
+            let _ = writeln!(out, "{line}").and_then(|()| out.flush());
+        } else {
+            self.show(event);
+        }
+    }
+}
+
+/// The command line that continues this run: the original arguments with `--resume` added (once).
+pub fn resume_command() -> String {
+    let mut args: Vec<String> = std::env::args().collect();
+    if !args.iter().any(|a| a == "--resume") {
+        args.push("--resume".into());
+    }
+    args.iter().map(|a| shell_quote(a)).collect::<Vec<_>>().join(" ")
+}
+
+/// `text` quoted for a POSIX shell when it needs it.
+fn shell_quote(text: &str) -> String {
+    let plain = !text.is_empty() && text.bytes().all(|b| b.is_ascii_alphanumeric() || b"-_./=:,+@%".contains(&b));
+    if plain { text.to_string() } else { format!("'{}'", text.replace('\'', r"'\''")) }
+}
+
+/// Ends a run: passes a result through; for a run stopped by Ctrl-C prints the resume command and exits with
+/// [`EXIT_INTERRUPTED`]; turns other errors into messages that say what to do (a non-empty directory, a changed
+/// configuration), with the resume command when a dataset was started.
+///
+/// # Errors
+/// The run's error, with advice.
+pub fn conclude<T>(result: Result<T, RecipeError>, args: &RunArgs) -> anyhow::Result<T> {
+    let error = match result {
+        Ok(value) => return Ok(value),
+        Err(error) => error,
+    };
+    match &error {
+        RecipeError::Interrupted { committed } => {
+            eprintln!("stopped with {committed} committed; everything committed is kept. Resume with:");
+            eprintln!("  {}", resume_command());
+            std::process::exit(EXIT_INTERRUPTED);
+        }
+        RecipeError::Store(StoreError::NotEmpty { .. }) => Err(anyhow::Error::new(error).context(format!(
+            "{} already holds files: add --resume to continue the run in it, or choose another --out",
+            args.out.display()
+        ))),
+        RecipeError::Store(StoreError::ConfigChanged { .. }) => Err(anyhow::Error::new(error)
+            .context("the run in --out was made with another configuration: add --force to resume it anyway")),
+        _ if args.out.join(MANIFEST_FILE).exists() => {
+            eprintln!("the run stopped; everything committed is kept. Once the problem is fixed, resume with:");
+            eprintln!("  {}", resume_command());
+            Err(error.into())
+        }
+        _ => Err(error.into()),
+    }
+}

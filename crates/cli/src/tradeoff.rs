@@ -1,0 +1,240 @@
+//! `metaplate tradeoff`: the speed/accuracy trade of the scan's excitation protocols, measured on the mock lab.
+//!
+//! For each protocol, the scan recipe runs on a subset of the scene's grid (fast-forward, with the scene's full
+//! noise, clock drift and actuator nonlinearity, no calibration filters: raw drives), and the Green's functions
+//! it commits are compared with the lab's ground truth (`MockLab::response_error_db`, band 80..600 Hz). Time per
+//! point is rig-clock time as measured (beam moves, settling, playback, recording margins, re-measures), beside
+//! the protocol's nominal playing time. The pixel area is the analysis crate's `pixel_area_map` on the measured
+//! dataset: on a coarse subset grid most half-maximum contours reach the edge of the measured area and are not
+//! counted, so it is `null` there (use a dense grid, 20 x 10 or more, for a meaningful number).
+//!
+//! Cost: the default (5 x 3 grid: 11 measurable points, 7 protocols) simulates about 40 minutes of rig time; in a
+//! release build on 2 shared cores it took 59 s (metamaterial) and 35 s (homogeneous) with the Green's functions
+//! already cached (--cache-dir), about 2 to 3 minutes when they must be computed.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use clap::Args;
+use metaplate_analysis::pixel::{PixelAreaOptions, pixel_area_map};
+use metaplate_control::PropagationMatrices;
+use metaplate_core::scene::Scene;
+use metaplate_lab::{ERROR_BAND_HZ, LabOptions, MockLab};
+use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, scan};
+use metaplate_recipes::{Output, RunControl, Silent};
+use metaplate_store::{Dataset, SceneId};
+use serde_json::{Value, json};
+
+/// Protocols measured by default.
+const DEFAULT_PROTOCOLS: &str =
+    "paper,quick,sequential-exp:1x2,interleaved:2,hadamard:0.6x1,hadamard:1x2,adaptive:0.6x2@30/4";
+
+/// Band of G(omega) for the pixel area, Hz (as `metaplate analyze`).
+const G_BAND_HZ: (f64, f64) = (75.0, 400.0);
+
+#[derive(Args)]
+pub struct TradeoffArgs {
+    /// Built-in scene name or scene file.
+    #[arg(long)]
+    scene: String,
+    /// Grid subset NXxNY (evenly spread points of the scene's grid; masked points are skipped).
+    #[arg(long, default_value = "5x3")]
+    grid: String,
+    /// Comma-separated protocols. Syntax: paper | quick | sequential:DxR | sequential-exp:DxR | hadamard:DxR |
+    /// interleaved:D | adaptive:DxR@SNR[/ROUNDS] (D sweep seconds >= 0.6, R periods per shot (>= 2 for
+    /// adaptive), SNR dB).
+    #[arg(long, default_value = DEFAULT_PROTOCOLS)]
+    protocols: String,
+    /// Seed of the lab and the scan.
+    #[arg(long, default_value_t = 7)]
+    seed: u64,
+    /// Where the scene's Green's functions are cached (default: a temporary cache for this run).
+    #[arg(long)]
+    cache_dir: Option<PathBuf>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Write the time-against-error Pareto plot (PNG and SVG) into this directory.
+    #[arg(long)]
+    figures: Option<PathBuf>,
+}
+
+/// One protocol's measured trade.
+struct Measured {
+    name: String,
+    time_per_point_s: f64,
+    nominal_time_per_point_s: f64,
+    scan_hours: f64,
+    median_error_db: f64,
+    p95_error_db: f64,
+    median_pixel_area_cm2: Option<f64>,
+    failed_rows: usize,
+}
+
+pub fn run(args: &TradeoffArgs) -> anyhow::Result<()> {
+    let scene = Scene::resolve(&args.scene).with_context(|| format!("loading scene {}", args.scene))?;
+    let (nx, ny) = parse_grid(&args.grid)?;
+    let mask = scene.grid_mask();
+    let full_points = mask.iter().filter(|m| **m).count();
+    let plan = ScanPlan::new(scene.grid, &mask, Some((nx, ny)))?;
+    let protocols: Vec<ScanProtocol> =
+        args.protocols.split(',').map(|n| ScanProtocol::by_name(n.trim())).collect::<Result<_, _>>()?;
+    if protocols.is_empty() {
+        bail!("no protocol given");
+    }
+    // Each protocol needs a lab of its own (a lab hands out one rig); without a cache every one would recompute the
+    // same Green's functions, so a temporary cache shares them.
+    let scratch_cache = match &args.cache_dir {
+        Some(_) => None,
+        None => Some(tempfile_dir()?),
+    };
+    let options = LabOptions {
+        seed: Some(args.seed),
+        cache_dir: args.cache_dir.clone().or_else(|| scratch_cache.clone()),
+        points: Some(plan.points.clone()),
+        ..LabOptions::default()
+    };
+    let mut rows = Vec::new();
+    for protocol in protocols {
+        let lab = MockLab::new(&scene, &options).context("building the mock lab")?;
+        let m = measure(&lab, &scene, &plan, protocol, args.seed, full_points)?;
+        if !args.json {
+            eprintln!(
+                "{:<28} {:>7.1} s/point (nominal {:>6.1})  {:>6.1} h  median {:>6.1} dB  p95 {:>6.1} dB",
+                m.name, m.time_per_point_s, m.nominal_time_per_point_s, m.scan_hours, m.median_error_db, m.p95_error_db
+            );
+        }
+        rows.push(m);
+    }
+    if let Some(dir) = scratch_cache {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    let out = to_json(&scene.name, &plan, full_points, &rows);
+    if let Some(dir) = &args.figures {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let points: Vec<metaplate_figures::TradeoffPoint> = rows
+            .iter()
+            .map(|m| metaplate_figures::TradeoffPoint {
+                label: m.name.clone(),
+                time_per_point_s: m.time_per_point_s,
+                median_error_db: m.median_error_db,
+            })
+            .collect();
+        let title = format!("{}: scan time against Green's-function error", scene.name);
+        metaplate_figures::tradeoff(dir, "tradeoff", &points, &title)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        println!("{}", out["goal"]);
+    }
+    Ok(())
+}
+
+fn parse_grid(s: &str) -> anyhow::Result<(usize, usize)> {
+    let (a, b) = s.split_once('x').with_context(|| format!("--grid {s}: expected NXxNY"))?;
+    Ok((a.parse().context("--grid NX")?, b.parse().context("--grid NY")?))
+}
+
+/// Scans `plan` with `protocol` on `lab` into a temporary directory and measures the result.
+fn measure(
+    lab: &MockLab,
+    scene: &Scene,
+    plan: &ScanPlan,
+    protocol: ScanProtocol,
+    seed: u64,
+    full_points: usize,
+) -> anyhow::Result<Measured> {
+    let dir = tempfile_dir()?;
+    let out = Output {
+        dir: dir.clone(),
+        scene: SceneId { name: scene.name.clone(), hash: format!("fnv1a64:{:016x}", scene.content_hash()) },
+        software_version: env!("CARGO_PKG_VERSION").into(),
+        resume: false,
+        force: false,
+    };
+    let actuators = scene.actuators.len();
+    let nominal = protocol.nominal_time_per_point_s(actuators);
+    let name = protocol.name.clone();
+    let cfg = ScanConfig { protocol, seed, ..ScanConfig::default() };
+    let mut rig = lab.rig()?;
+    let summary = scan(&mut rig, plan, None, &cfg, &out, &RunControl::new(), &mut Silent)
+        .with_context(|| format!("scanning with {name}"))?;
+    let dataset = Dataset::open(&dir)?;
+    let mut errors = Vec::new();
+    for &p in &plan.points {
+        for a in 0..actuators {
+            let ir = dataset.ir(p as u32, a as u16).with_context(|| format!("row ({p}, {a}) missing"))?;
+            let ir: Vec<f64> = ir.iter().map(|v| f64::from(*v)).collect();
+            errors.push(lab.response_error_db(p, a, &ir, dataset.sample_rate_hz(), ERROR_BAND_HZ)?);
+        }
+    }
+    errors.sort_by(f64::total_cmp);
+    let quantile = |q: f64| errors[((errors.len() - 1) as f64 * q).round() as usize];
+    let failed_rows = summary.statuses.get("failed").copied().unwrap_or(0);
+    let pixel = median_pixel_area(&dataset, plan);
+    let time_per_point_s = summary.clock_s / plan.points.len() as f64;
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(Measured {
+        name,
+        time_per_point_s,
+        nominal_time_per_point_s: nominal,
+        scan_hours: time_per_point_s * full_points as f64 / 3600.0,
+        median_error_db: quantile(0.5),
+        p95_error_db: quantile(0.95),
+        median_pixel_area_cm2: pixel,
+        failed_rows,
+    })
+}
+
+/// Median pixel area of the measured dataset, cm^2; `None` when no contour closes (coarse grids) or it fails.
+fn median_pixel_area(dataset: &Dataset, plan: &ScanPlan) -> Option<f64> {
+    let g = PropagationMatrices::from_dataset(dataset, G_BAND_HZ, None).ok()?;
+    let mut mask = vec![false; plan.grid.len()];
+    for &p in &plan.points {
+        mask[p] = true;
+    }
+    pixel_area_map(&g, &plan.grid, &mask, &PixelAreaOptions::default()).ok()?.median_area_cm2()
+}
+
+/// A fresh directory under the system's temporary directory.
+fn tempfile_dir() -> anyhow::Result<PathBuf> {
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    let dir = std::env::temp_dir().join(format!("metaplate-tradeoff-{}-{nanos}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    Ok(dir)
+}
+
+fn to_json(scene: &str, plan: &ScanPlan, full_points: usize, rows: &[Measured]) -> Value {
+    let paper = rows.iter().find(|m| m.name == "paper");
+    // The fastest protocol that reaches the paper's median error (within 0.5 dB: two draws of the same noise
+    // differ by about that much on a small grid) in a fifth of its time per point or less.
+    let goal = paper.and_then(|p| {
+        rows.iter()
+            .filter(|m| m.name != "paper" && m.failed_rows == 0)
+            .filter(|m| m.median_error_db <= p.median_error_db + 0.5 && m.time_per_point_s * 5.0 <= p.time_per_point_s)
+            .min_by(|a, b| a.time_per_point_s.total_cmp(&b.time_per_point_s))
+            .map(|m| {
+                let speedup = p.time_per_point_s / m.time_per_point_s;
+                json!({ "protocol": m.name, "speedup": speedup, "fraction_of_8x_limit": speedup / 8.0,
+                        "paper_median_error_db": p.median_error_db, "median_error_db": m.median_error_db })
+            })
+    });
+    json!({
+        "scene": scene,
+        "grid_points_measured": plan.points.len(),
+        "grid_points_full": full_points,
+        "error_band_hz": [ERROR_BAND_HZ.0, ERROR_BAND_HZ.1],
+        "protocols": rows.iter().map(|m| json!({
+            "name": m.name,
+            "time_per_point_s": m.time_per_point_s,
+            "nominal_time_per_point_s": m.nominal_time_per_point_s,
+            "scan_hours": m.scan_hours,
+            "median_error_db": m.median_error_db,
+            "p95_error_db": m.p95_error_db,
+            "median_pixel_area_cm2": m.median_pixel_area_cm2,
+            "failed_rows": m.failed_rows,
+        })).collect::<Vec<_>>(),
+        "goal": goal,
+    })
+}

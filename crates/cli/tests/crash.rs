@@ -1,0 +1,175 @@
+//! Crash safety of `metaplate scan`: kill -9 at 20 and more random instants (some inside a commit, made wide by the
+//! store's commit-pause test hook), resume each time until it finishes; the final dataset must equal an
+//! uninterrupted run with the same seed, point for point: same keys, bit-identical impulse responses, same statuses,
+//! no duplicates, no gaps.
+
+// Helpers outside #[test] functions unwrap too: a failure there is a failed test.
+#![allow(clippy::unwrap_used)]
+
+use std::collections::BTreeSet;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use metaplate_store::Dataset;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// The scan under test: 4 x 3 points of the metamaterial grid (all on the plate), the quick protocol, seed 5.
+const SCAN: &[&str] =
+    &["scan", "--scene", "metamaterial", "--protocol", "quick", "--grid", "4x3", "--seed", "5", "--uncalibrated"];
+/// Milliseconds each commit pauses between its batch file's rename and its journal line (the store's test hook):
+/// long against a point's acquisition in fast-forward (about 0.15 s in the debug profile), so that a good share of
+/// random kills land inside a commit.
+const COMMIT_PAUSE_MS: u64 = 200;
+const KILLS: usize = 24;
+
+fn cache_dir() -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("metaplate-greens-cache");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn command(out: &Path, resume: bool) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_metaplate"));
+    command.args(SCAN).arg("--out").arg(out).arg("--cache-dir").arg(cache_dir()).arg("--json");
+    if resume {
+        command.arg("--resume");
+    }
+    command.env("METAPLATE_TEST_COMMIT_PAUSE_MS", COMMIT_PAUSE_MS.to_string()).env("RUST_BACKTRACE", "0");
+    command
+}
+
+/// Batch files in `batches/` that no journal line lists (a kill between the rename and the journal append).
+fn unjournaled_batches(dir: &Path) -> usize {
+    let journal = std::fs::read_to_string(dir.join("journal.jsonl")).unwrap_or_default();
+    let journaled: BTreeSet<String> = journal
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter_map(|v| v["file"].as_str().map(str::to_owned))
+        .collect();
+    let Ok(entries) = std::fs::read_dir(dir.join("batches")) else { return 0 };
+    entries
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.ends_with(".parquet") && !journaled.contains(name))
+        .count()
+}
+
+/// Runs to completion, returning the wall time from the `started` event to the end and the points.
+fn uninterrupted(out: &Path) -> Duration {
+    let mut child = command(out, false).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    let mut started = None;
+    for line in BufReader::new(child.stdout.take().unwrap()).lines() {
+        if line.unwrap().contains("\"started\"") {
+            started = Some(Instant::now());
+        }
+    }
+    let output = child.wait_with_output().unwrap();
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    started.unwrap().elapsed()
+}
+
+#[test]
+fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let reference_dir = tmp.path().join("reference");
+    let scan_time = uninterrupted(&reference_dir);
+    let reference = Dataset::open(&reference_dir).unwrap();
+    let points = reference.points().len();
+    eprintln!("uninterrupted: {points} points in {scan_time:?} after start-up");
+
+    let dir = tmp.path().join("crashed");
+    let mut rng = ChaCha8Rng::seed_from_u64(0x6b69_6c6c);
+    let (mut kills, mut inside_commit, mut runs) = (0, 0, 0);
+    let per_point = scan_time / points as u32;
+    loop {
+        runs += 1;
+        assert!(runs < 200, "no end after {runs} runs");
+        let resume = runs > 1;
+        let mut child = command(&dir, resume).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+        let spawned = Instant::now();
+        // Lines from the child as they come, time-stamped on arrival.
+        let (tx, rx) = mpsc::channel();
+        let stdout = child.stdout.take().unwrap();
+        let reader = std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines() {
+                if tx.send(line.unwrap()).is_err() {
+                    break;
+                }
+            }
+        });
+        let kill_at = if kills >= KILLS {
+            None
+        } else if rng.random_bool(0.2) {
+            // Anywhere in start-up: opening the dataset (resume, quarantine), the lab, the instruments.
+            Some(spawned + Duration::from_secs_f64(rng.random_range(0.0..0.6)))
+        } else {
+            // After the scan started, or after its first commit (so that the run makes progress), within one
+            // point's time: an acquisition, processing, or the next commit.
+            let marker = if rng.random_bool(0.25) { "\"committed\"" } else { "\"started\"" };
+            let seen = rx.iter().find(|l| l.contains(marker) || l.contains("\"finished\""));
+            let delay = per_point.mul_f64(rng.random_range(0.0..1.0));
+            seen.filter(|l| !l.contains("\"finished\"")).map(|_| Instant::now() + delay)
+        };
+        let mut killed = false;
+        if let Some(at) = kill_at {
+            std::thread::sleep(at.saturating_duration_since(Instant::now()));
+            if child.try_wait().unwrap().is_none() {
+                // SIGKILL (std's kill on Unix): no handler runs, as with kill -9.
+                child.kill().unwrap();
+                killed = true;
+            }
+        }
+        let output = child.wait_with_output().unwrap();
+        reader.join().unwrap();
+        if killed && output.status.code().is_none() {
+            kills += 1;
+            if unjournaled_batches(&dir) > 0 {
+                inside_commit += 1;
+            }
+            continue;
+        }
+        assert!(output.status.success(), "run {runs}: {}", String::from_utf8_lossy(&output.stderr));
+        break;
+    }
+    eprintln!("{kills} kills ({inside_commit} inside a commit) in {runs} runs");
+    assert!(kills >= 20, "only {kills} kills landed");
+    assert!(inside_commit >= 1, "no kill landed between a batch file's rename and its journal line");
+
+    let crashed = Dataset::open(&dir).unwrap();
+    assert_eq!(crashed.len(), reference.len(), "no duplicates, no gaps");
+    let keys = |d: &Dataset| d.rows().iter().map(|r| (r.point_index, r.actuator)).collect::<BTreeSet<_>>();
+    assert_eq!(keys(&crashed), keys(&reference));
+    assert_eq!(keys(&crashed).len(), crashed.len(), "each (point, actuator) once");
+    // Every row bit for bit; the differences are collected first, so that a failure says how far apart the two
+    // runs are (relative error energy of the impulse response, dB) and where.
+    let mut mismatches = Vec::new();
+    for row in reference.rows() {
+        let (p, a) = (row.point_index, row.actuator);
+        let other = crashed.meta(p, a).unwrap();
+        let (x, y) = (crashed.ir(p, a).unwrap(), reference.ir(p, a).unwrap());
+        let same_ir = x.iter().zip(y).all(|(u, v)| u.to_bits() == v.to_bits());
+        let same_snr = other.snr_db.map(f64::to_bits) == row.snr_db.map(f64::to_bits);
+        if !same_ir || !same_snr || other.status != row.status {
+            let error: f64 = x.iter().zip(y).map(|(u, v)| f64::from(u - v).powi(2)).sum();
+            let energy: f64 = y.iter().map(|v| f64::from(*v).powi(2)).sum();
+            mismatches.push(format!(
+                "point {p} actuator {a}: IR error {:.1} dB, SNR {:?} vs {:?}, status {:?} vs {:?}",
+                10.0 * (error / energy).log10(),
+                other.snr_db,
+                row.snr_db,
+                other.status,
+                row.status
+            ));
+        }
+    }
+    assert!(
+        mismatches.is_empty(),
+        "{} of {} rows differ:\n{}",
+        mismatches.len(),
+        reference.len(),
+        mismatches.join("\n")
+    );
+}

@@ -1,0 +1,197 @@
+//! `metaplate calibrate` and `metaplate scan` end to end, as a user runs them, on the built-in metamaterial scene's
+//! mock lab (fast-forward): calibrate then scan, `--json` events and the log, Ctrl-C and resume, a changed
+//! configuration on resume.
+//!
+//! The plate's Green's functions are cached in `CARGO_TARGET_TMPDIR` (keyed by scene and request, so a stale entry
+//! cannot be read): the first run of this file computes them (about a minute of CPU per point set in the debug
+//! profile), later runs take seconds.
+
+// Helpers outside #[test] functions unwrap too: a failure there is a failed test.
+#![allow(clippy::unwrap_used)]
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
+
+use metaplate_store::{Dataset, Status};
+use serde_json::Value;
+
+/// The scan every test runs: 3 x 2 points of the metamaterial grid (all 6 on the plate), the quick protocol.
+const SCAN: &[&str] = &["--scene", "metamaterial", "--protocol", "quick", "--grid", "3x2", "--seed", "5"];
+const POINTS: usize = 6;
+const ACTUATORS: usize = 8;
+
+fn cache_dir() -> &'static Path {
+    static CACHE: OnceLock<PathBuf> = OnceLock::new();
+    CACHE.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("metaplate-greens-cache");
+        std::fs::create_dir_all(&dir).unwrap();
+        // Warm the scan's entry once, so that tests running in parallel do not all compute it.
+        let warm = tempfile::tempdir().unwrap();
+        let out = run(&scan_args(&warm.path().join("warm"), &["--uncalibrated"]), &dir);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        dir
+    })
+}
+
+fn scan_args(out: &Path, extra: &[&str]) -> Vec<String> {
+    let mut args: Vec<String> = ["scan", "--out", out.to_str().unwrap()].iter().map(|s| s.to_string()).collect();
+    args.extend(SCAN.iter().chain(extra).map(|s| s.to_string()));
+    args
+}
+
+fn command(args: &[String], cache: &Path) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_metaplate"));
+    command.args(args).arg("--cache-dir").arg(cache).env("RUST_BACKTRACE", "0");
+    command
+}
+
+fn run(args: &[String], cache: &Path) -> Output {
+    command(args, cache).output().unwrap()
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Checks a finished scan dataset: one row per point and actuator, every row valid or re-measured (the quick
+/// protocol's SNR on this plate is 40 dB and more, far above the 20 dB gate, so a failed row is a bug).
+fn assert_complete_scan(dir: &Path) {
+    let dataset = Dataset::open(dir).unwrap();
+    assert_eq!(dataset.len(), POINTS * ACTUATORS, "one row per point and actuator");
+    assert_eq!(dataset.points().len(), POINTS);
+    for row in dataset.rows() {
+        assert!(matches!(row.status, Some(Status::Valid | Status::ReMeasured)), "{row:?}");
+    }
+}
+
+/// Sends SIGINT (what Ctrl-C sends) to `child`, with kill(1): the workspace forbids unsafe code, tests included.
+fn interrupt(child: &std::process::Child) {
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+}
+
+#[test]
+fn calibrate_then_scan_end_to_end_with_json_events_and_a_log() {
+    let cache = cache_dir();
+    let tmp = tempfile::tempdir().unwrap();
+    let cal = tmp.path().join("cal");
+    let args: Vec<String> = ["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let out = run(&args, cache);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let calibration = Dataset::open(&cal).unwrap();
+    assert_eq!(calibration.actuators().len(), ACTUATORS, "one commit per actuator");
+    assert_eq!(calibration.len(), 3 * ACTUATORS, "filter, response and verification per actuator");
+    assert!(cal.join("calibrate.log").is_file());
+
+    let scan = tmp.path().join("scan");
+    let out = run(&scan_args(&scan, &["--calibration", cal.to_str().unwrap(), "--json"]), cache);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_complete_scan(&scan);
+
+    let events: Vec<Value> = text(&out.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let kinds: Vec<&str> = events.iter().map(|e| e["event"].as_str().unwrap()).collect();
+    assert_eq!(kinds.first(), Some(&"started"), "{kinds:?}");
+    assert_eq!(kinds.last(), Some(&"finished"), "{kinds:?}");
+    let committed: Vec<&Value> = events.iter().filter(|e| e["event"] == "committed").collect();
+    assert_eq!(committed.len(), POINTS, "one committed event per point");
+    let last = committed[POINTS - 1];
+    assert_eq!((last["done"].as_u64(), last["total"].as_u64()), (Some(POINTS as u64), Some(POINTS as u64)));
+    assert!(last["snr_db"].as_f64().unwrap() > 20.0, "{last}");
+    assert_eq!(last["eta_h"].as_f64(), Some(0.0));
+    assert!(last["rate_per_hour"].as_f64().unwrap() > 0.0);
+
+    let log = std::fs::read_to_string(scan.join("scan.log")).unwrap();
+    assert!(log.matches("committed").count() >= POINTS, "{log}");
+    assert!(!log.contains('\u{1b}'), "no colour codes in the log");
+}
+
+#[test]
+fn ctrl_c_stops_cleanly_and_resume_completes_refusing_a_changed_configuration() {
+    let cache = cache_dir();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("scan");
+    let args = scan_args(&dir, &["--uncalibrated", "--json"]);
+
+    // SIGINT once, right after the first commit: the point in flight is finished and committed, then it stops.
+    let mut child = command(&args, cache).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let first_commit = lines.by_ref().map(Result::unwrap).find(|l| l.contains("\"committed\""));
+    assert!(first_commit.is_some(), "no commit seen");
+    interrupt(&child);
+    let rest: Vec<String> = lines.map(Result::unwrap).collect();
+    let out = child.wait_with_output().unwrap();
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("stopping after the current point (Ctrl-C again to abandon it)"), "{stderr}");
+    let resume = stderr.lines().find(|l| l.trim_start().contains(" scan ") && l.contains("--resume"));
+    assert!(resume.is_some_and(|l| l.contains("--protocol quick") && l.contains("--grid 3x2")), "{stderr}");
+    assert_eq!(rest.last().map(|l| l.contains("\"stopped\"")), Some(true), "{rest:?}");
+    let partial = Dataset::open(&dir).unwrap();
+    let committed = partial.points().len();
+    assert!((1..POINTS).contains(&committed), "stopped after {committed} points");
+    assert_eq!(partial.len(), committed * ACTUATORS, "whole points only");
+
+    // Without --resume, the directory is refused; with a changed protocol, the resume is refused saying what
+    // changed; with --force it proceeds.
+    let out = run(&args, cache);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("--resume"), "{}", text(&out.stderr));
+    let mut changed = scan_args(&dir, &["--uncalibrated", "--resume"]);
+    let protocol = changed.iter().position(|a| a == "quick").unwrap();
+    changed[protocol] = "paper".into();
+    let out = run(&changed, cache);
+    let stderr = text(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(stderr.contains("protocol") && stderr.contains("--force"), "{stderr}");
+    assert_eq!(Dataset::open(&dir).unwrap().len(), committed * ACTUATORS, "a refused resume changes nothing");
+
+    let mut forced = changed.clone();
+    forced.push("--force".into());
+    let out = run(&forced, cache);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_complete_scan(&dir);
+}
+
+#[test]
+fn resume_after_ctrl_c_completes_the_same_configuration() {
+    let cache = cache_dir();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("scan");
+    let args = scan_args(&dir, &["--uncalibrated", "--json"]);
+    let mut child = command(&args, cache).stdout(Stdio::piped()).stderr(Stdio::null()).spawn().unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    assert!(lines.by_ref().map(Result::unwrap).any(|l| l.contains("\"committed\"")));
+    interrupt(&child);
+    lines.for_each(drop);
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+
+    let mut resume = args.clone();
+    resume.push("--resume".into());
+    let out = run(&resume, cache);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_complete_scan(&dir);
+    let events: Vec<Value> = text(&out.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let started = &events[0];
+    assert!(started["done"].as_u64().unwrap() >= 1, "resume starts after the committed points: {started}");
+    assert_eq!(events.last().unwrap()["event"], "finished");
+}
+
+#[test]
+fn a_hardware_file_without_its_devices_is_a_clear_error() {
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/hardware.example.toml");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["scan", "--hardware", example, "--uncalibrated", "--out"])
+        .arg(tmp.path().join("scan"))
+        .output()
+        .unwrap();
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("cannot open the LDV") && stderr.contains("usb-FTDI"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -1,0 +1,124 @@
+//! Resumption: a scan stopped after several commits and abandoned in the middle of a point, resumed each time on a
+//! restarted lab, ends with the dataset of an uninterrupted run, point for point; a changed configuration is
+//! refused (saying what changed) unless forced.
+
+#![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
+
+mod common;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use common::{
+    Recorder, assert_same_rows, image, metamaterial, output, quick_config, run_scan, run_scan_with, small_plan,
+};
+use metaplate_recipes::scan::{ScanConfig, scan};
+use metaplate_recipes::{Event, RecipeError, RunControl, Silent};
+use metaplate_store::{Dataset, StoreError};
+
+/// Points of the test plan: enough for three stops and a remainder.
+const POINTS: usize = 9;
+
+/// `Started { done }` of a run's events.
+fn started_done(events: &[Event]) -> usize {
+    events.iter().find_map(|e| if let Event::Started { done, .. } = e { Some(*done) } else { None }).unwrap()
+}
+
+#[test]
+fn stopped_and_abandoned_runs_resume_to_the_uninterrupted_dataset() {
+    let scene = metamaterial();
+    let plan = small_plan(POINTS);
+    let reference_dir = tempfile::tempdir().unwrap();
+    run_scan(&plan, &output(reference_dir.path(), &scene, false), &RunControl::new(), &mut Silent).unwrap();
+    let reference = image(reference_dir.path());
+    // Two uninterrupted runs are bit-identical: what differs after a resume is only the absolute clock time.
+    let again_dir = tempfile::tempdir().unwrap();
+    run_scan(&plan, &output(again_dir.path(), &scene, false), &RunControl::new(), &mut Silent).unwrap();
+    assert!(image(again_dir.path()) == reference, "two uninterrupted runs with one seed are bit-identical");
+
+    let dir = tempfile::tempdir().unwrap();
+    let mut committed_so_far = 0;
+    // Stops after 2, then 3 commits (Ctrl-C once, right after a commit): the point in flight (recorded while the
+    // previous one was processed) is finished and committed too, so each run commits one more.
+    for (k, stop_after) in [2, 3].into_iter().enumerate() {
+        let control = RunControl::new();
+        control.stop_after_commits(stop_after);
+        let mut events = Recorder::default();
+        let err = run_scan(&plan, &output(dir.path(), &scene, k > 0), &control, &mut events).unwrap_err();
+        assert_eq!(started_done(&events.0), committed_so_far, "resume starts after the last commit");
+        committed_so_far += stop_after + 1;
+        assert!(matches!(err, RecipeError::Interrupted { committed } if committed == committed_so_far), "{err}");
+    }
+
+    // Ctrl-C twice in the middle of a point: a watcher raises level 2 once the rig's clock is half way into the
+    // second point of this run (a point takes ~21 s of quick protocol). No event is emitted inside a point's
+    // acquisition without faults (an observer raising it at a commit finds the next point already recorded, which
+    // is then committed whole), so the watcher follows the lab's clock from its own thread.
+    let (lab, _) = common::lab_and_plan(&scene, 7, 5);
+    let mut rig = lab.rig().unwrap();
+    let control = RunControl::new();
+    let finished = AtomicBool::new(false);
+    let clock = lab.clock().clone();
+    let (result, raised_at_s) = std::thread::scope(|scope| {
+        let watcher = scope.spawn(|| {
+            while !finished.load(Ordering::Acquire) {
+                let now_s = metaplate_core::clock::Clock::now_s(clock.as_ref());
+                if now_s > 32.0 {
+                    control.request_stop();
+                    control.request_stop();
+                    return Some(now_s);
+                }
+                std::thread::sleep(std::time::Duration::from_micros(200));
+            }
+            None
+        });
+        let out = output(dir.path(), &scene, true);
+        let result = scan(&mut rig, &plan, None, &quick_config(), &out, &control, &mut Silent);
+        finished.store(true, Ordering::Release);
+        (result, watcher.join().unwrap())
+    });
+    let raised_at_s = raised_at_s.expect("the stop was raised during the run");
+    let RecipeError::Interrupted { committed } = result.unwrap_err() else { panic!("not an interruption") };
+    eprintln!("level 2 raised at {raised_at_s:.2} s; {committed} committed");
+    // The first point of this run was in processing and is committed; the second is abandoned.
+    assert!(committed > committed_so_far && committed < POINTS, "{committed} committed after an abandon");
+    committed_so_far = committed;
+
+    // The rest, uninterrupted.
+    let mut events = Recorder::default();
+    let summary = run_scan(&plan, &output(dir.path(), &scene, true), &RunControl::new(), &mut events).unwrap();
+    assert_eq!(started_done(&events.0), committed_so_far);
+    assert_eq!(summary.committed_now, POINTS - committed_so_far, "only what was missing is measured");
+    assert_eq!(summary.committed, POINTS);
+
+    // No duplicates (the reader refuses them), no gaps (the same keys), the same bits and statuses.
+    let resumed = image(dir.path());
+    assert_eq!(resumed.len(), POINTS * scene.actuators.len());
+    assert_same_rows(&reference, &resumed, "resumed vs uninterrupted");
+}
+
+#[test]
+fn a_changed_configuration_is_refused_saying_what_changed_and_proceeds_when_forced() {
+    let scene = metamaterial();
+    let plan = small_plan(3);
+    let dir = tempfile::tempdir().unwrap();
+    let control = RunControl::new();
+    control.stop_after_commits(1);
+    let err = run_scan(&plan, &output(dir.path(), &scene, false), &control, &mut Silent).unwrap_err();
+    let RecipeError::Interrupted { committed } = err else { panic!("{err}") };
+
+    let changed = ScanConfig { min_snr_db: 25.0, ..quick_config() };
+    let err =
+        run_scan_with(&plan, &changed, &output(dir.path(), &scene, true), &RunControl::new(), &mut Silent).unwrap_err();
+    let message = err.to_string();
+    let RecipeError::Store(StoreError::ConfigChanged { differences, .. }) = &err else { panic!("{message}") };
+    // Exactly the one key changed, named with its old and new values.
+    assert_eq!(differences.len(), 1, "{differences:?}");
+    assert!(message.contains("min_snr_db") && message.contains("20") && message.contains("25"), "{message}");
+    assert!(message.contains("force"), "the message says how to proceed: {message}");
+    assert_eq!(Dataset::open(dir.path()).unwrap().points().len(), committed, "a refused resume changes nothing");
+
+    let forced = metaplate_recipes::Output { force: true, ..output(dir.path(), &scene, true) };
+    let summary = run_scan_with(&plan, &changed, &forced, &RunControl::new(), &mut Silent).unwrap();
+    assert_eq!((summary.committed_now, summary.committed), (3 - committed, 3));
+    assert_eq!(Dataset::open(dir.path()).unwrap().len(), 3 * scene.actuators.len());
+}
