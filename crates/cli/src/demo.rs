@@ -23,9 +23,8 @@ use anyhow::{Context, bail};
 use clap::Args;
 use indicatif::ProgressBar;
 use metaplate_core::scene::Scene;
-use metaplate_dsp::fft;
 use metaplate_dsp::kirkeby::KirkebyFilter;
-use metaplate_lab::{LabOptions, MockLab};
+use metaplate_lab::{ERROR_BAND_HZ, LabOptions, MockLab};
 use metaplate_plate::ModelOptions;
 use metaplate_recipes::calibrate::ActuatorCalibration;
 use metaplate_recipes::{
@@ -33,7 +32,6 @@ use metaplate_recipes::{
     ScanSummary, calibrate, scan,
 };
 use metaplate_store::{Dataset, SceneId};
-use num_complex::Complex64;
 use serde_json::{Value, json};
 
 use crate::focus::{PixelSpec, RenderOptions, render};
@@ -65,13 +63,6 @@ const DISPERSION_FREQS_HZ: [f64; 6] = [75.0, 150.0, 250.0, 400.0, 500.0, 600.0];
 /// The default scan grid: every other point of the paper's 49 x 25 (1 cm spacing: 4 points per wavelength at
 /// 600 Hz, 3.5 x 3.5 cm authority domains hold 16 points).
 const DEFAULT_GRID: (usize, usize) = (25, 13);
-
-/// Band over which measured Green's functions are compared with the ground truth, Hz: the flat part of the scan's
-/// deconvolution band (62 to 625 Hz with skirts outside).
-const ERROR_BAND_HZ: (f64, f64) = (80.0, 600.0);
-/// Every how many DFT bins the comparison is made (2 Hz bins of 0.5 s responses: 8 Hz apart, 65 frequencies; the
-/// truth is an exact DTFT per frequency, the costly part).
-const ERROR_BIN_STRIDE: usize = 4;
 
 /// The pattern: positions as fractions of the measured area (-1..1 each way) and targets (`metaplate focus`
 /// syntax; times in s from the start of the 1 s drive, whose focus time is 0.5 s).
@@ -248,51 +239,22 @@ impl Observer for Progress {
     }
 }
 
-/// Per measured row (point, actuator): the error of the measured response against the lab's truth over
-/// [`ERROR_BAND_HZ`], `10 log10(sum |H - T|^2 / sum |T|^2)` in dB, with `T` the true response through the
-/// actuator's inverse filter (the scan measures the compensated response, referred to the filter's modelling
-/// delay). Sorted ascending.
+/// Per measured row (point, actuator): the error of the measured response against the lab's truth through the
+/// actuator's inverse filter ([`MockLab::response_error_db`] over [`ERROR_BAND_HZ`]), dB. Sorted ascending.
 fn greens_errors(lab: &MockLab, dataset: &Dataset, filters: &[KirkebyFilter]) -> anyhow::Result<Vec<f64>> {
     let fs = dataset.sample_rate_hz();
-    let n = dataset.ir_len();
-    let bins: Vec<usize> = (0..n / 2 + 1)
-        .filter(|&k| (ERROR_BAND_HZ.0..=ERROR_BAND_HZ.1).contains(&fft::bin_freq_hz(k, n, fs)))
-        .step_by(ERROR_BIN_STRIDE)
-        .collect();
-    let freqs: Vec<f64> = bins.iter().map(|&k| fft::bin_freq_hz(k, n, fs)).collect();
-    let filter_responses: Vec<Vec<Complex64>> = filters.iter().map(|f| delayless_response(f, &freqs)).collect();
     let mut errors = Vec::with_capacity(dataset.len());
     for &p in dataset.points() {
         for &a in dataset.actuators() {
             let Some(ir) = dataset.ir(p, a) else { continue };
             let ir: Vec<f64> = ir.iter().map(|v| f64::from(*v)).collect();
-            let spectrum = fft::forward(&ir, n)?;
-            let truth = lab.true_response(p as usize, usize::from(a), &freqs)?;
-            let k_a = filter_responses.get(usize::from(a)).context("internal: no filter for an actuator")?;
-            let (mut err, mut energy) = (0.0, 0.0);
-            for ((&k, t), kf) in bins.iter().zip(&truth).zip(k_a) {
-                let t = t * kf;
-                err += (spectrum[k] - t).norm_sqr();
-                energy += t.norm_sqr();
-            }
-            errors.push(10.0 * (err / energy).log10());
+            let filter = filters.get(usize::from(a)).context("internal: no filter for an actuator")?;
+            errors.push(lab.response_error_db(p as usize, usize::from(a), &ir, fs, ERROR_BAND_HZ, Some(filter))?);
         }
     }
     errors.retain(|e| e.is_finite());
     errors.sort_by(f64::total_cmp);
     Ok(errors)
-}
-
-/// The filter's frequency response at `freqs_hz` with its modelling delay removed (DTFT of the taps).
-fn delayless_response(filter: &KirkebyFilter, freqs_hz: &[f64]) -> Vec<Complex64> {
-    let d = filter.modelling_delay_samples as f64;
-    freqs_hz
-        .iter()
-        .map(|&f| {
-            let w = 2.0 * std::f64::consts::PI * f / filter.sample_rate_hz;
-            filter.taps.iter().enumerate().map(|(n, &h)| Complex64::from_polar(h, -w * (n as f64 - d))).sum()
-        })
-        .collect()
 }
 
 /// The value at quantile `q` (0..=1) of sorted `values` (nearest rank), `None` when empty.

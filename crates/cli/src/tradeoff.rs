@@ -166,7 +166,7 @@ fn measure(
         for a in 0..actuators {
             let ir = dataset.ir(p as u32, a as u16).with_context(|| format!("row ({p}, {a}) missing"))?;
             let ir: Vec<f64> = ir.iter().map(|v| f64::from(*v)).collect();
-            errors.push(lab.response_error_db(p, a, &ir, dataset.sample_rate_hz(), ERROR_BAND_HZ)?);
+            errors.push(lab.response_error_db(p, a, &ir, dataset.sample_rate_hz(), ERROR_BAND_HZ, None)?);
         }
     }
     errors.sort_by(f64::total_cmp);

@@ -3,6 +3,8 @@
 
 use metaplate_dsp::error::check_signal;
 use metaplate_dsp::fft;
+use metaplate_dsp::kirkeby::KirkebyFilter;
+use num_complex::Complex64;
 
 use crate::{LabError, MockLab};
 
@@ -14,14 +16,16 @@ impl MockLab {
     /// Relative error energy of a measured response `ir` (m/s per full scale, sampled at `sample_rate_hz`) against
     /// [`MockLab::true_response`] of (`point`, `actuator`), over the FFT bins of `ir` (its own length) within
     /// `band_hz`, dB: `10 log10(sum |H - T|^2 / sum |T|^2)`. -20 dB means the error is a tenth of the truth's
-    /// amplitude.
+    /// amplitude. With `compensation`, the truth is taken through that inverse filter with its modelling delay
+    /// removed: what a scan through the filter measures (the loopback carries the delay, and the division cancels
+    /// it).
     ///
     /// Valid range: a finite, non-empty `ir`; `0 <= lo < hi <= sample_rate_hz / 2` holding at least one bin where
     /// the truth is not zero.
     ///
     /// # Errors
     /// [`LabError::Dsp`] for an empty or non-finite `ir`; [`LabError::InvalidOption`] for a band with no bin or a
-    /// truth of zero energy there; as [`MockLab::true_response`] otherwise.
+    /// truth of zero energy there, or a filter at another sample rate; as [`MockLab::true_response`] otherwise.
     pub fn response_error_db(
         &self,
         point: usize,
@@ -29,6 +33,7 @@ impl MockLab {
         ir: &[f64],
         sample_rate_hz: f64,
         band_hz: (f64, f64),
+        compensation: Option<&KirkebyFilter>,
     ) -> Result<f64, LabError> {
         check_signal("measured response", ir)?;
         let n = ir.len();
@@ -37,7 +42,24 @@ impl MockLab {
             .filter(|&k| (band_hz.0..=band_hz.1).contains(&fft::bin_freq_hz(k, n, sample_rate_hz)))
             .collect();
         let freqs: Vec<f64> = bins.iter().map(|&k| fft::bin_freq_hz(k, n, sample_rate_hz)).collect();
-        let truth = self.true_response(point, actuator, &freqs)?;
+        let mut truth = self.true_response(point, actuator, &freqs)?;
+        if let Some(filter) = compensation {
+            if filter.sample_rate_hz != sample_rate_hz {
+                return Err(LabError::InvalidOption {
+                    name: "compensation",
+                    reason: format!(
+                        "the filter runs at {} Hz, the response at {sample_rate_hz} Hz",
+                        filter.sample_rate_hz
+                    ),
+                });
+            }
+            let response = filter_response_at_bins(filter, n)?;
+            let delay = filter.modelling_delay_samples as f64;
+            for (t, &k) in truth.iter_mut().zip(&bins) {
+                let advance = Complex64::from_polar(1.0, std::f64::consts::TAU * k as f64 * delay / n as f64);
+                *t *= response[k] * advance;
+            }
+        }
         let (mut err, mut energy) = (0.0, 0.0);
         for (&k, t) in bins.iter().zip(&truth) {
             err += (spectrum[k] - t).norm_sqr();
@@ -51,4 +73,14 @@ impl MockLab {
         }
         Ok(10.0 * (err / energy).log10())
     }
+}
+
+/// The filter's frequency response at the bins of an `n`-point DFT: its taps folded modulo `n` (exact: at those
+/// frequencies tap `m` and tap `m + n` turn by the same phase), then one FFT.
+fn filter_response_at_bins(filter: &KirkebyFilter, n: usize) -> Result<Vec<Complex64>, LabError> {
+    let mut folded = vec![0.0; n];
+    for (m, h) in filter.taps.iter().enumerate() {
+        folded[m % n] += h;
+    }
+    Ok(fft::forward(&folded, n)?)
 }

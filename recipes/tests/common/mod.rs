@@ -6,13 +6,11 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use metaplate_core::scene::Scene;
-use metaplate_dsp::fft;
 use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, ScanSummary, scan};
 use metaplate_recipes::{Event, Observer, Output, RecipeError, RunControl};
 use metaplate_store::{Dataset, SceneId};
-use num_complex::Complex64;
 
 /// Compared band, Hz: inside the deconvolution band's flat part (62..625 Hz, skirts outside it) and the sweep.
 pub const BAND_HZ: (f64, f64) = (80.0, 600.0);
@@ -92,8 +90,7 @@ pub fn error_db(lab: &MockLab, point: usize, actuator: usize, ir: &[f32], fs: f6
     error_db_compensated(lab, point, actuator, ir, fs, None)
 }
 
-/// As [`error_db`] for a scan through `filter`: the measured response is then the truth times the filter's
-/// response with its modelling delay removed (the loopback carries that delay, and the division cancels it).
+/// As [`error_db`] for a scan through `filter` (see [`MockLab::response_error_db`]).
 pub fn error_db_compensated(
     lab: &MockLab,
     point: usize,
@@ -103,26 +100,7 @@ pub fn error_db_compensated(
     filter: Option<&KirkebyFilter>,
 ) -> f64 {
     let ir: Vec<f64> = ir.iter().map(|v| f64::from(*v)).collect();
-    let n = ir.len();
-    let spectrum = fft::forward(&ir, n).unwrap();
-    let bins: Vec<usize> =
-        (0..spectrum.len()).filter(|&k| (BAND_HZ.0..=BAND_HZ.1).contains(&fft::bin_freq_hz(k, n, fs))).collect();
-    let freqs: Vec<f64> = bins.iter().map(|&k| fft::bin_freq_hz(k, n, fs)).collect();
-    let mut truth = lab.true_response(point, actuator, &freqs).unwrap();
-    if let Some(filter) = filter {
-        for (t, f) in truth.iter_mut().zip(&freqs) {
-            let w = -std::f64::consts::TAU * f / filter.sample_rate_hz;
-            let response: Complex64 =
-                filter.taps.iter().enumerate().map(|(n, h)| Complex64::from_polar(*h, w * n as f64)).sum();
-            *t *= response * Complex64::from_polar(1.0, -w * filter.modelling_delay_samples as f64);
-        }
-    }
-    let (mut err, mut energy) = (0.0, 0.0);
-    for (&k, t) in bins.iter().zip(&truth) {
-        err += (spectrum[k] - t).norm_sqr();
-        energy += t.norm_sqr();
-    }
-    10.0 * (err / energy).log10()
+    lab.response_error_db(point, actuator, &ir, fs, BAND_HZ, filter).unwrap()
 }
 
 /// Median and worst of `errors_db` (sorted in place).
