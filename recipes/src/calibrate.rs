@@ -13,8 +13,8 @@
 
 use metaplate_core::rig::Rig;
 use metaplate_dsp::deconv::{DeconvConfig, deconvolve_with_reference};
-use metaplate_dsp::kirkeby::{KirkebyConfig, KirkebyFilter, design};
-use metaplate_dsp::smooth::smoothed_minimum_phase;
+use metaplate_dsp::equalise::{EqualiserConfig, design_equaliser};
+use metaplate_dsp::kirkeby::{KirkebyConfig, KirkebyFilter};
 use metaplate_dsp::sweep::SweepSpec;
 use metaplate_store::{Dataset, DatasetMeta, GridSpec, IrMeta, IrRecord, Status};
 use serde_json::{Map, Value, json};
@@ -24,7 +24,7 @@ use crate::control::{Event, Observer, RunControl};
 use crate::dataset::{self, Output};
 use crate::error::RecipeError;
 use crate::instruments::{Acquisition, Instruments, RecoveryPolicy};
-use crate::quality::{Flatness, flatness, median};
+use crate::quality::{Flatness, median, smoothed_flatness};
 use crate::signals::{Playback, excitation};
 
 /// Recipe name in the manifest.
@@ -54,8 +54,14 @@ pub struct CalibrationConfig {
     pub max_deviation_db: f64,
     /// Octave fraction (3: a third of an octave) over which the response's power is averaged before it is
     /// inverted, and the verification before its flatness is judged: the plate's driving-point modes, narrow peaks
-    /// and notches at the magnet, are the plate's and are left alone (see [`metaplate_dsp::smooth`]).
+    /// and notches at the magnet, are the plate's and are left alone (see [`metaplate_dsp::smooth`]). Windows are
+    /// cut at the check band's edges, so the roll-off outside it does not count.
     pub smoothing_fraction: f64,
+    /// The design is refined until the predicted compensated response (the measured one through the taps) is this
+    /// flat, dB, or `max_designs` were made (see [`metaplate_dsp::equalise`]).
+    pub design_tolerance_db: f64,
+    /// Designs at most per measured response.
+    pub max_designs: usize,
     /// Measurements per actuator before it is committed as failed.
     pub max_attempts: u32,
     /// Velocity range asked of the vibrometer first, m/s (widened tenfold on clipping).
@@ -80,6 +86,8 @@ impl Default for CalibrationConfig {
             check_band_hz: (62.0, 625.0),
             max_deviation_db: 1.0,
             smoothing_fraction: 3.0,
+            design_tolerance_db: 0.25,
+            max_designs: 16,
             max_attempts: 3,
             max_velocity_m_s: 0.1,
             aim: AimPolicy::default(),
@@ -107,6 +115,8 @@ impl CalibrationConfig {
             "check_band_hz": [self.check_band_hz.0, self.check_band_hz.1],
             "max_deviation_db": self.max_deviation_db,
             "smoothing_fraction": self.smoothing_fraction,
+            "design_tolerance_db": self.design_tolerance_db,
+            "max_designs": self.max_designs,
             "max_attempts": self.max_attempts,
             "max_velocity_m_s": self.max_velocity_m_s,
             "aim": { "min_signal_level": self.aim.min_signal_level, "nudge_m": self.aim.nudge_m,
@@ -277,21 +287,32 @@ fn calibrate_one(
             RecipeError::Config(format!("actuator {actuator}: no response in the band (is it connected?)"))
         })?;
         let normalised: Vec<f64> = response.iter().map(|v| v / reference_gain).collect();
-        // The broadband response, with the plate's narrow driving-point modes averaged out, is what is inverted.
-        let smoothed = smoothed_minimum_phase(&normalised, deconv.pre_samples, fs, cfg.smoothing_fraction)?;
-        let filter = design(&smoothed, kirkeby)?;
+        // The broadband response, with the plate's narrow driving-point modes averaged out, is what is flattened.
+        let equaliser = design_equaliser(
+            &normalised,
+            &EqualiserConfig {
+                kirkeby: *kirkeby,
+                fraction: cfg.smoothing_fraction,
+                band_hz: cfg.check_band_hz,
+                tolerance_db: cfg.design_tolerance_db,
+                max_designs: cfg.max_designs,
+            },
+        )?;
+        let (predicted_db, designs) = (equaliser.predicted_deviation_db(), equaliser.designs);
+        let filter = equaliser.filter;
         // Verification: the sweep through the filter; the loopback carries the modelling delay, so the result is the
         // compensated response about time 0.
         let compensated = Playback::new(sweep, 1, deconv.ir_len + filter.taps.len(), Some(&filter))?;
         let acq = measure(instruments, &compensated, actuator, control, observer)?;
         let verification = to_response(&acq, deconv, instruments)?;
-        let judged = smoothed_minimum_phase(&verification, deconv.pre_samples, fs, cfg.smoothing_fraction)?;
-        let flat = flatness(&judged, fs, cfg.check_band_hz.0, cfg.check_band_hz.1)?;
+        let flat = smoothed_flatness(&verification, fs, cfg.check_band_hz, cfg.smoothing_fraction)?;
         let pass = flat.deviation_db() <= cfg.max_deviation_db;
         tracing::info!(
             actuator,
             attempt,
             deviation_db = flat.deviation_db(),
+            predicted_db,
+            designs,
             boost_db = filter.max_boost_db,
             "verified"
         );

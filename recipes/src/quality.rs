@@ -1,6 +1,6 @@
 //! Quality measures and gates shared by the recipes.
 
-use metaplate_dsp::{DspError, fft};
+use metaplate_dsp::DspError;
 
 /// Flatness of a response over a band: its magnitude in dB at every FFT bin within `[lo_hz, hi_hz]`, relative to
 /// the median of those bins.
@@ -21,37 +21,26 @@ impl Flatness {
     }
 }
 
-/// Flatness of `ir` (sampled at `sample_rate_hz`) over `[lo_hz, hi_hz]`, from its zero-padded FFT (at least
-/// twice its length, so the bins are spaced at most half the response's own resolution).
+/// Flatness of `ir` (sampled at `sample_rate_hz`) over `band_hz`, on its power smoothed over `1/fraction` of an
+/// octave within the band ([`metaplate_dsp::smooth::smoothed_levels_db`]): narrow peaks and notches narrower than
+/// the smoothing do not count, and the roll-off outside the band does not pull the edges down.
 ///
-/// Valid range: a finite, non-empty `ir`; `0 <= lo_hz < hi_hz <= sample_rate_hz / 2` with at least one bin inside
-/// (the band at least `sample_rate_hz / (2 len)` wide).
+/// Valid range: a finite, non-empty `ir`; `0 <= lo < hi <= sample_rate_hz / 2` with at least one bin inside;
+/// `fraction >= 1`.
 ///
 /// # Errors
-/// [`DspError::Empty`] / [`DspError::NonFinite`] for `ir`; [`DspError::InvalidParameter`] for a band holding no bin
-/// or a response that is zero somewhere in the band (its level in dB would be -infinity).
-pub fn flatness(ir: &[f64], sample_rate_hz: f64, lo_hz: f64, hi_hz: f64) -> Result<Flatness, DspError> {
-    metaplate_dsp::error::check_signal("response", ir)?;
-    let n = fft::fast_len(2 * ir.len())?;
-    let spectrum = fft::forward(ir, n)?;
-    let mut levels_db = Vec::new();
-    for (k, c) in spectrum.iter().enumerate() {
-        let f = fft::bin_freq_hz(k, n, sample_rate_hz);
-        if (lo_hz..=hi_hz).contains(&f) {
-            let magnitude = c.norm();
-            if magnitude <= 0.0 {
-                return Err(DspError::InvalidParameter {
-                    name: "response",
-                    reason: format!("is zero at {f:.1} Hz, inside the band"),
-                });
-            }
-            levels_db.push(20.0 * magnitude.log10());
-        }
-    }
-    let median_db = median(&mut levels_db).ok_or_else(|| DspError::InvalidParameter {
-        name: "band",
-        reason: format!("{lo_hz} to {hi_hz} Hz holds no bin of a {n}-point FFT at {sample_rate_hz} Hz"),
-    })?;
+/// [`DspError::Empty`] / [`DspError::NonFinite`] for `ir`; [`DspError::InvalidParameter`] for a band holding no bin,
+/// a bad `fraction`, or a response with no power somewhere in the band (its level in dB would be -infinity).
+pub fn smoothed_flatness(
+    ir: &[f64],
+    sample_rate_hz: f64,
+    band_hz: (f64, f64),
+    fraction: f64,
+) -> Result<Flatness, DspError> {
+    let levels = metaplate_dsp::smooth::smoothed_levels_db(ir, sample_rate_hz, fraction, band_hz)?;
+    let mut levels_db: Vec<f64> = levels.iter().map(|(_, l)| *l).collect();
+    // Not empty: smoothed_levels_db refuses a band without bins.
+    let median_db = median(&mut levels_db).unwrap_or(0.0);
     let (min, max) = levels_db.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
     Ok(Flatness { median_db, min_db: min - median_db, max_db: max - median_db })
 }
@@ -96,18 +85,25 @@ mod tests {
     use super::*;
 
     #[test]
-    fn an_impulse_is_flat_and_a_two_tap_comb_is_not() {
+    fn an_impulse_is_flat_a_fine_comb_smooths_flat_and_a_coarse_one_does_not() {
         let mut impulse = vec![0.0; 64];
         impulse[3] = 2.0;
-        let f = flatness(&impulse, 24_000.0, 100.0, 5000.0).unwrap();
+        let f = smoothed_flatness(&impulse, 24_000.0, (100.0, 5000.0), 3.0).unwrap();
         // |FFT| of a scaled impulse is exactly 2 at every bin: rounding only.
-        assert!((f.median_db - 20.0 * 2f64.log10()).abs() < 1e-12 && f.deviation_db() < 1e-12, "{f:?}");
-        // h = [1, 0.5]: |H| ranges from 0.5 to 1.5 over the full band, a 9.5 dB spread.
-        let comb = [1.0, 0.5];
-        let f = flatness(&comb, 24_000.0, 0.0, 12_000.0).unwrap();
-        assert!((f.max_db - f.min_db - 20.0 * 3f64.log10()).abs() < 1e-9, "{f:?}");
-        assert!(flatness(&comb, 24_000.0, 100.0, 101.0).is_err());
-        assert!(flatness(&[], 24_000.0, 0.0, 1.0).is_err());
+        assert!((f.median_db - 20.0 * 2f64.log10()).abs() < 1e-9 && f.deviation_db() < 1e-9, "{f:?}");
+        // h = d[0] + 0.5 d[240]: ripple every 100 Hz, 9.5 dB peak to trough; a third octave at 1..5 kHz spans 230 Hz
+        // or more, so the power averages to within a few tenths of a dB of 1 + 0.25.
+        let mut fine = vec![0.0; 4096];
+        fine[0] = 1.0;
+        fine[240] = 0.5;
+        let f = smoothed_flatness(&fine, 24_000.0, (1000.0, 5000.0), 3.0).unwrap();
+        assert!(f.deviation_db() < 0.5 && (f.median_db - 10.0 * 1.25f64.log10()).abs() < 0.2, "{f:?}");
+        // h = [1, 0.5]: |H| ranges from 0.5 to 1.5 over the full band, too broad for any smoothing to remove.
+        let f = smoothed_flatness(&[1.0, 0.5], 24_000.0, (0.0, 12_000.0), 3.0).unwrap();
+        assert!(f.max_db - f.min_db > 6.0, "{f:?}");
+        assert!(smoothed_flatness(&[1.0, 0.5], 24_000.0, (100.0, 101.0), 3.0).is_err(), "no bin in the band");
+        assert!(smoothed_flatness(&[], 24_000.0, (0.0, 1.0), 3.0).is_err());
+        assert!(smoothed_flatness(&impulse, 24_000.0, (100.0, 5000.0), 0.5).is_err(), "fraction below 1");
     }
 
     #[test]

@@ -11,9 +11,8 @@ use common::{
     quick_config,
 };
 use metaplate_core::scene::Scene;
-use metaplate_dsp::smooth::smoothed_minimum_phase;
 use metaplate_recipes::calibrate::{ActuatorCalibration, VERIFY_IX, calibrate};
-use metaplate_recipes::quality::flatness;
+use metaplate_recipes::quality::smoothed_flatness;
 use metaplate_recipes::scan::scan;
 use metaplate_recipes::{Calibration, CalibrationConfig, RecipeError, RunControl, Silent};
 use metaplate_store::{Dataset, Status};
@@ -34,9 +33,6 @@ fn calibrate_all(rig: &mut metaplate_core::rig::Rig, scene: &Scene, dir: &std::p
 }
 
 #[test]
-#[ignore = "known failure (issue 5): inverting the third-octave-smoothed magnet response (the plate's driving-point \
-            modes left alone) leaves the smoothed verification within -3.7 .. +2.0 dB over 62..600 Hz and -2.5 dB at \
-            625 Hz, where the smoothing window reaches past the flattened band; not the +/-1 dB asked"]
 fn every_actuator_calibrates_flat_within_1_db() {
     let scene = metamaterial();
     let (lab, _) = lab_and_plan(&scene, 7, 5);
@@ -50,12 +46,13 @@ fn every_actuator_calibrates_flat_within_1_db() {
     let stored = Dataset::open(dir.path()).unwrap();
     for r in &results {
         let verify: Vec<f64> = stored.ir(VERIFY_IX, r.actuator as u16).unwrap().iter().map(|v| f64::from(*v)).collect();
-        let (lo, hi) = cfg.check_band_hz;
         let fs = stored.sample_rate_hz();
-        let judged = smoothed_minimum_phase(&verify, cfg.deconv.pre_samples, fs, cfg.smoothing_fraction).unwrap();
-        let flat = flatness(&judged, fs, lo, hi).unwrap();
+        let flat = smoothed_flatness(&verify, fs, cfg.check_band_hz, cfg.smoothing_fraction).unwrap();
         assert!(flat.deviation_db() <= 1.0, "actuator {} stored verification: {flat:?}", r.actuator);
         assert_eq!(r.status, Status::Valid, "actuator {}: {:?}", r.actuator, r.flatness);
+        // Flattening a magnet response that falls some 30 dB over the band takes that much boost and a little more
+        // for its broad notches (35 to 40 dB measured); the Kirkeby regularisation (beta 1e-5) caps it near 50.
+        assert!(r.filter.max_boost_db < 45.0, "actuator {}: boost {:.1} dB", r.actuator, r.filter.max_boost_db);
         assert!(r.flatness.deviation_db() <= cfg.max_deviation_db, "actuator {}: {:?}", r.actuator, r.flatness);
     }
 }

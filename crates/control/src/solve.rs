@@ -63,8 +63,10 @@ pub enum Method {
     /// Spatiotemporal inverse filtering (regularised least squares), the paper's method.
     #[default]
     InverseFilter,
-    /// Time reversal: `a = G_C^H v_C / s_max^2`, the matched filter; exact only where the pixels' responses are
-    /// orthogonal, but needs no inversion at all.
+    /// Time reversal: `a = G_C^H v_C`, the matched filter (the time-reversed responses), with no per-frequency
+    /// normalisation: its spectrum keeps the colouring `|G|^2` that physical time reversal has, and its overall
+    /// scale is arbitrary (renders are peak-normalised; `analysis::focus` scales by one band constant). The same
+    /// convention as [`crate::focal`]. Exact only where the pixels' responses are orthogonal, but needs no inversion.
     TimeReversal,
 }
 
@@ -134,19 +136,10 @@ fn tikhonov_svd(
 }
 
 fn time_reversal(g_c: MatRef<'_, Complex64>, v_c: &[Complex64]) -> Result<Vec<Complex64>, ControlError> {
-    let n = g_c.ncols();
-    let s = g_c
-        .singular_values()
-        .map_err(|e| ControlError::LinearAlgebra { what: "singular values of G_C", reason: format!("{e:?}") })?;
-    let s_max = s.iter().copied().fold(0.0, f64::max);
-    let mut a = vec![Complex64::new(0.0, 0.0); n];
-    if s_max == 0.0 {
-        return Ok(a);
-    }
-    let scale = 1.0 / (s_max * s_max);
+    let mut a = vec![Complex64::new(0.0, 0.0); g_c.ncols()];
     for (j, aj) in a.iter_mut().enumerate() {
         for (r, &vr) in v_c.iter().enumerate() {
-            *aj += g_c[(r, j)].conj() * vr * scale;
+            *aj += g_c[(r, j)].conj() * vr;
         }
     }
     Ok(a)
@@ -168,6 +161,27 @@ mod tests {
 
     use super::*;
     use faer::Mat;
+
+    /// Time reversal is the plain matched filter, bin by bin: `a = G^H v`, unscaled, so two bins whose responses
+    /// differ by a factor 10 get drives that differ by that factor (no per-bin normalisation), as in
+    /// `focal::single_pixel_focal_fields`.
+    #[test]
+    fn time_reversal_is_the_unnormalised_matched_filter() {
+        let rows = [
+            [Complex64::new(1.0, 2.0), Complex64::new(-0.5, 0.0)],
+            [Complex64::new(0.0, 1.0), Complex64::new(3.0, -1.0)],
+        ];
+        let g = Mat::from_fn(2, 2, |i, j| rows[i][j]);
+        let v = [Complex64::new(1.0, 0.0), Complex64::new(0.0, -2.0)];
+        for scale in [1.0, 10.0] {
+            let gs = Mat::from_fn(2, 2, |i, j| rows[i][j] * scale);
+            let a = solve_bin(gs.as_ref(), &v, Regularisation::Absolute(0.0), Method::TimeReversal).unwrap();
+            for (j, aj) in a.iter().enumerate() {
+                let expected: Complex64 = (0..2).map(|i| g[(i, j)].conj() * scale * v[i]).sum();
+                assert!((aj - expected).norm() <= 1e-12 * expected.norm().max(1.0), "{aj} against {expected}");
+            }
+        }
+    }
 
     /// The closed form is the SVD solver's one-pixel case: `a = conj(g) v single_pixel_gain(|g|^2)`.
     #[test]

@@ -2,7 +2,7 @@
 //!
 //! What every recipe stands on: swept-sine excitations ([`sweep`]), deconvolution of a recording by its excitation or
 //! by the recorded loopback reference ([`deconv`]), coherent averaging of repetitions with clock-drift correction
-//! ([`average`], [`drift`]), Kirkeby inverse filters that flatten the actuators ([`kirkeby`]), and the windows,
+//! ([`average`], [`drift`]), Kirkeby inverse filters that flatten the actuators ([`kirkeby`], refined over a smoothed band by [`equalise`]), and the windows,
 //! band limits and band-limited impulses they share ([`window`], [`band`], [`impulse`]).
 //!
 //! Every public routine checks its input: an empty signal, a NaN or infinity, or a parameter outside the routine's
@@ -13,10 +13,12 @@ pub mod band;
 pub mod conv;
 pub mod deconv;
 pub mod drift;
+pub mod equalise;
 pub mod error;
 pub mod fft;
 pub mod impulse;
 pub mod kirkeby;
+pub mod lstsq;
 pub mod pipeline;
 pub mod protocol;
 pub mod resample;

@@ -1,5 +1,5 @@
-//! Fractional-octave smoothing of a response's power spectrum, and the minimum-phase response with that smoothed
-//! magnitude.
+//! Fractional-octave smoothing of a response's power spectrum, the levels it gives over a band, and the
+//! minimum-phase response of a magnitude.
 //!
 //! Why: an actuator measured on its own magnet also shows the plate's driving-point modes, peaks and notches of
 //! +/-25 dB a few hertz wide. They belong to the plate at that one point, not to the actuator: an inverse filter
@@ -14,10 +14,19 @@ use crate::error::{DspError, check_result, check_signal};
 use crate::{fft, impulse};
 
 /// Power spectrum `power` (bins `0..=n/2` of an `n`-point DFT at `sample_rate_hz`) averaged over `1/fraction` of
-/// an octave around each bin: bin `k` at `f` averages the bins within `f * 2^(+-1/(2 fraction))`; bin 0 is kept.
+/// an octave around each bin: bin `k` at `f` takes the mean of the bins from `f / 2^(1/fraction)` to
+/// `f * 2^(1/fraction)` weighted by a triangle that peaks at `f`, whose equivalent width (area over peak) is
+/// `1/fraction` of an octave; bin 0 is kept.
+///
+/// Why a triangle and not the plain mean over `f * 2^(+-1/(2 fraction))`: with a rectangular window, a narrow mode
+/// steps the smoothed level up as it enters a bin's window and down as it leaves, by a dB or two for a strong one;
+/// no smooth filter can flatten a step. A triangle's weights go to zero at its ends, so the smoothed level is
+/// continuous.
 ///
 /// Valid range: `power.len() == n / 2 + 1`, finite non-negative powers, `fraction` finite and >= 1 (1 is a whole
-/// octave; 3 the usual third-octave), finite positive sample rate. Linear time (prefix sums).
+/// octave; 3 the usual third-octave), finite positive sample rate. Linear time (prefix sums): a bin whose window
+/// holds power some 1e14 times below the total power under it comes back with a large relative error (rounding of
+/// the sums), never below 0.
 ///
 /// # Errors
 /// [`DspError::LengthMismatch`], [`DspError::NonFinite`], [`DspError::InvalidParameter`] naming the bad argument.
@@ -26,6 +35,47 @@ pub fn fractional_octave_power(
     n: usize,
     sample_rate_hz: f64,
     fraction: f64,
+) -> Result<Vec<f64>, DspError> {
+    smooth_power(power, n, sample_rate_hz, fraction, None)
+}
+
+/// As [`fractional_octave_power`], except that a bin inside `band_hz` (`lo..=hi`) averages only the bins inside
+/// the band: a window reaching past the band's edge is cut there, so a response rolled off outside the band does not
+/// pull its smoothed level down near the edge. Bins outside the band are smoothed as by [`fractional_octave_power`].
+///
+/// Valid range: as [`fractional_octave_power`], and `0 <= lo_hz < hi_hz`.
+///
+/// # Errors
+/// As [`fractional_octave_power`]; [`DspError::InvalidParameter`] naming `band_hz` for a bad band.
+pub fn fractional_octave_power_in_band(
+    power: &[f64],
+    n: usize,
+    sample_rate_hz: f64,
+    fraction: f64,
+    band_hz: (f64, f64),
+) -> Result<Vec<f64>, DspError> {
+    let (lo_hz, hi_hz) = band_hz;
+    if !(lo_hz.is_finite() && hi_hz.is_finite() && lo_hz >= 0.0 && lo_hz < hi_hz) {
+        return Err(DspError::InvalidParameter {
+            name: "band_hz",
+            reason: format!("must satisfy 0 <= lo < hi, got {lo_hz} .. {hi_hz} Hz"),
+        });
+    }
+    let bin = |f: f64| f * n as f64 / sample_rate_hz;
+    // The bins whose frequencies lie in the band: ceil(lo) ..= floor(hi), empty when the band holds none.
+    let first = bin(lo_hz).ceil().max(0.0) as usize;
+    let last = bin(hi_hz).floor().max(0.0) as usize;
+    smooth_power(power, n, sample_rate_hz, fraction, Some((first, last)))
+}
+
+/// The smoothing behind [`fractional_octave_power`] and [`fractional_octave_power_in_band`]: `limits`, when given,
+/// are the first and last bins of a band whose bins average only among themselves.
+fn smooth_power(
+    power: &[f64],
+    n: usize,
+    sample_rate_hz: f64,
+    fraction: f64,
+    limits: Option<(usize, usize)>,
 ) -> Result<Vec<f64>, DspError> {
     if power.len() != fft::bin_count(n) {
         return Err(DspError::LengthMismatch {
@@ -47,61 +97,126 @@ pub fn fractional_octave_power(
             reason: format!("must be finite and positive, got {sample_rate_hz}"),
         });
     }
-    let mut prefix = Vec::with_capacity(power.len() + 1);
-    prefix.push(0.0);
-    for p in power {
-        prefix.push(prefix[prefix.len() - 1] + p);
+    // Prefix sums of P_j and j P_j: a triangle's weighted sum over any range is a combination of the two.
+    let mut sum_p = Vec::with_capacity(power.len() + 1);
+    let mut sum_jp = Vec::with_capacity(power.len() + 1);
+    sum_p.push(0.0);
+    sum_jp.push(0.0);
+    for (j, p) in power.iter().enumerate() {
+        sum_p.push(sum_p[j] + p);
+        sum_jp.push(sum_jp[j] + j as f64 * p);
     }
-    let half_width = 2f64.powf(0.5 / fraction);
-    let last = power.len() - 1;
+    let range = |v: &[f64], lo: usize, hi: usize| v[hi + 1] - v[lo];
+    let span = 2f64.powf(1.0 / fraction);
+    let top = power.len() - 1;
     let smoothed: Vec<f64> = (0..power.len())
         .map(|k| {
             if k == 0 {
                 return power[0];
             }
-            // Bin numbers scale with frequency, so the band's edges in bins are k / w and k w.
-            let lo = ((k as f64 / half_width).ceil() as usize).clamp(1, k);
-            let hi = ((k as f64 * half_width).floor() as usize).clamp(k, last);
-            (prefix[hi + 1] - prefix[lo]) / (hi + 1 - lo) as f64
+            // The triangle rises from k / span to 1 at k and falls to 0 at k span (bin numbers scale with
+            // frequency): its weights are (j - left) / (k - left) below k and (right - j) / (right - k) above.
+            let (kf, left, right) = (k as f64, k as f64 / span, k as f64 * span);
+            let mut lo = (left.ceil() as usize).clamp(1, k);
+            let mut hi = (right.floor() as usize).clamp(k, top);
+            if let Some((first, last)) = limits.filter(|(first, last)| (*first..=*last).contains(&k)) {
+                lo = lo.max(first);
+                hi = hi.min(last);
+            }
+            let ones = |a: usize, b: usize| ((b + 1 - a) as f64, (a + b) as f64 * (b + 1 - a) as f64 / 2.0);
+            let (below_n, below_j) = ones(lo, k);
+            let mut numerator = (range(&sum_jp, lo, k) - left * range(&sum_p, lo, k)) / (kf - left);
+            let mut denominator = (below_j - left * below_n) / (kf - left);
+            if hi > k {
+                let (above_n, above_j) = ones(k + 1, hi);
+                numerator += (right * range(&sum_p, k + 1, hi) - range(&sum_jp, k + 1, hi)) / (right - kf);
+                denominator += (right * above_n - above_j) / (right - kf);
+            }
+            // Differences of prefix sums can round below zero where the power is far below what lies under it.
+            (numerator / denominator).max(0.0)
         })
         .collect();
     check_result("smoothed power", &smoothed)?;
     Ok(smoothed)
 }
 
-/// The minimum-phase response whose magnitude is `ir`'s, smoothed over `1/fraction` of an octave: `ir.len()`
-/// samples, with time 0 at sample `pre_samples` as in `ir` (the samples before it are zero: a minimum-phase
-/// response starts at once).
+/// Levels of `ir`'s power spectrum smoothed over `1/fraction` of an octave within `band_hz`
+/// ([`fractional_octave_power_in_band`]), dB re 1 (units of `ir`), as `(freq_hz, level_db)` at every bin of a
+/// zero-padded FFT (at least twice `ir`'s length) inside the band.
 ///
-/// Valid range: `ir` finite, not all zero, `pre_samples < ir.len()`; `fraction` and `sample_rate_hz` as
-/// [`fractional_octave_power`]. The cepstrum is taken at twice the length, so the smoothed response (shorter than
-/// the raw one: smoothing removes the long ring of narrow modes) is not time-aliased.
+/// Valid range: a finite, non-empty `ir`; `fraction` and `sample_rate_hz` as [`fractional_octave_power`]; a band
+/// holding at least one bin.
 ///
 /// # Errors
-/// As [`fractional_octave_power`] and [`impulse::minimum_phase_spectrum`]; [`DspError::InvalidParameter`] for
-/// `pre_samples`.
-pub fn smoothed_minimum_phase(
+/// As [`fractional_octave_power_in_band`]; [`DspError::InvalidParameter`] for a band with no bin, or a response
+/// with no power somewhere in the band (its level would be -infinity).
+pub fn smoothed_levels_db(
     ir: &[f64],
-    pre_samples: usize,
     sample_rate_hz: f64,
     fraction: f64,
-) -> Result<Vec<f64>, DspError> {
+    band_hz: (f64, f64),
+) -> Result<Vec<(f64, f64)>, DspError> {
     check_signal("response", ir)?;
-    if pre_samples >= ir.len() {
-        return Err(DspError::InvalidParameter {
-            name: "pre_samples",
-            reason: format!("must be below the response's length ({}), got {pre_samples}", ir.len()),
-        });
-    }
     let n = fft::fast_len(2 * ir.len())?;
     let power: Vec<f64> = fft::forward(ir, n)?.iter().map(Complex64::norm_sqr).collect();
-    let smoothed = fractional_octave_power(&power, n, sample_rate_hz, fraction)?;
-    let magnitude: Vec<f64> = smoothed.iter().map(|p| p.sqrt()).collect();
-    let spectrum = impulse::minimum_phase_spectrum(&magnitude, n)?;
+    let smoothed = fractional_octave_power_in_band(&power, n, sample_rate_hz, fraction, band_hz)?;
+    band_levels_db(&smoothed, n, sample_rate_hz, band_hz)
+}
+
+/// `(freq_hz, 10 log10(power))` at the bins of an `n`-point DFT inside `band_hz`.
+pub(crate) fn band_levels_db(
+    power: &[f64],
+    n: usize,
+    sample_rate_hz: f64,
+    band_hz: (f64, f64),
+) -> Result<Vec<(f64, f64)>, DspError> {
+    let mut levels = Vec::new();
+    for (k, p) in power.iter().enumerate() {
+        let f = fft::bin_freq_hz(k, n, sample_rate_hz);
+        if (band_hz.0..=band_hz.1).contains(&f) {
+            if *p <= 0.0 {
+                return Err(DspError::InvalidParameter {
+                    name: "response",
+                    reason: format!("has no power at {f:.1} Hz, inside the band"),
+                });
+            }
+            levels.push((f, 10.0 * p.log10()));
+        }
+    }
+    if levels.is_empty() {
+        return Err(DspError::InvalidParameter {
+            name: "band_hz",
+            reason: format!("{} to {} Hz holds no bin of a {n}-point FFT at {sample_rate_hz} Hz", band_hz.0, band_hz.1),
+        });
+    }
+    Ok(levels)
+}
+
+/// The minimum-phase response with magnitude `magnitude` (bins `0..=n/2` of an `n`-point DFT): `len` samples, zero
+/// before time 0 at sample `pre_samples`, then the first `len - pre_samples` samples of the response.
+///
+/// Valid range: as [`impulse::minimum_phase_spectrum`]; `pre_samples < len <= n + pre_samples`. Pad the cepstrum
+/// (a larger `n`) for a magnitude with sharp features, whose minimum-phase response is long.
+///
+/// # Errors
+/// As [`impulse::minimum_phase_spectrum`]; [`DspError::InvalidParameter`] for `len` or `pre_samples`.
+pub fn minimum_phase_response(
+    magnitude: &[f64],
+    n: usize,
+    len: usize,
+    pre_samples: usize,
+) -> Result<Vec<f64>, DspError> {
+    if pre_samples >= len || len - pre_samples > n {
+        return Err(DspError::InvalidParameter {
+            name: "len",
+            reason: format!("need pre_samples ({pre_samples}) < len ({len}) <= n ({n}) + pre_samples"),
+        });
+    }
+    let spectrum = impulse::minimum_phase_spectrum(magnitude, n)?;
     let min_phase = fft::inverse(&spectrum, n)?;
     let mut out = vec![0.0; pre_samples];
-    out.extend_from_slice(&min_phase[..ir.len() - pre_samples]);
-    check_result("smoothed minimum-phase response", &out)?;
+    out.extend_from_slice(&min_phase[..len - pre_samples]);
+    check_result("minimum-phase response", &out)?;
     Ok(out)
 }
 
@@ -120,13 +235,37 @@ mod tests {
             let s = fractional_octave_power(&flat, n, 24_000.0, fraction).unwrap();
             assert!(s.iter().all(|v| (v - 2.0).abs() < 1e-12), "a flat spectrum stays flat");
         }
-        // A one-bin notch at bin 1000: a third octave there spans about 231 bins, so the notch costs 1/231 of the
-        // power (-0.02 dB); unsmoothed it is -inf dB.
+        // A one-bin notch at bin 1000, where the triangle (weight 1 at its peak) spans bins 794..=1259: the notch
+        // costs 1 / (sum of the weights), some 1/233 of the power (-0.02 dB); unsmoothed it is -inf dB.
         let mut notched = vec![1.0; bins];
         notched[1000] = 0.0;
         let s = fractional_octave_power(&notched, n, 24_000.0, 3.0).unwrap();
-        let width = (1000.0 * 2f64.powf(1.0 / 6.0)).floor() - (1000.0 / 2f64.powf(1.0 / 6.0)).ceil() + 1.0;
-        assert!((s[1000] - (1.0 - 1.0 / width)).abs() < 1e-12, "{}", s[1000]);
+        let (left, right) = (1000.0 / 2f64.powf(1.0 / 3.0), 1000.0 * 2f64.powf(1.0 / 3.0));
+        let weights: f64 = (1..bins)
+            .map(|j| j as f64)
+            .map(|j| if j <= 1000.0 { (j - left) / (1000.0 - left) } else { (right - j) / (right - 1000.0) })
+            .filter(|w| *w > 0.0)
+            .sum();
+        assert!((220.0..250.0).contains(&weights), "{weights}");
+        assert!((s[1000] - (1.0 - 1.0 / weights)).abs() < 1e-12, "{} against {}", s[1000], 1.0 - 1.0 / weights);
+        // A strong narrow mode (100 times the floor at bin 1000) enters and leaves the windows of the bins around
+        // it without a step: neighbouring bins' smoothed levels differ by at most one triangle-weight increment,
+        // 100 / (k - left) / 233 < 0.01 of the floor, where a rectangle would step by 100 / 233 = 0.43.
+        let mut mode = vec![1.0; bins];
+        mode[1000] = 101.0;
+        let s = fractional_octave_power(&mode, n, 24_000.0, 3.0).unwrap();
+        let largest_step = s[700..1400].windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0, f64::max);
+        assert!(largest_step < 0.01, "{largest_step}");
+        // A response that is 1 over 500..2000 Hz and 0 outside: smoothed within that band it stays exactly 1 up to
+        // both edges; smoothed plainly, the edges fall to about half (the triangle's half outside the band).
+        let boxed: Vec<f64> = (0..bins)
+            .map(|k| if (500.0..=2000.0).contains(&(k as f64 * 24_000.0 / n as f64)) { 1.0 } else { 0.0 })
+            .collect();
+        let inside = fractional_octave_power_in_band(&boxed, n, 24_000.0, 3.0, (500.0, 2000.0)).unwrap();
+        let plain = fractional_octave_power(&boxed, n, 24_000.0, 3.0).unwrap();
+        let edge = (2000.0 * n as f64 / 24_000.0) as usize;
+        assert!((86..=edge).all(|k| (inside[k] - 1.0).abs() < 1e-12), "in-band smoothing keeps the band flat");
+        assert!((0.4..0.6).contains(&plain[edge]), "{}", plain[edge]);
         // The extremes: bin 0 is kept; the top bin averages only what lies below it.
         assert_eq!(s[0], 1.0);
         assert!((s[bins - 1] - 1.0).abs() < 1e-12);
@@ -140,8 +279,10 @@ mod tests {
         assert!(matches!(fractional_octave_power(&p, 8, 0.0, 3.0), Err(DspError::InvalidParameter { .. })));
         let neg = [1.0, -1.0, 1.0, 1.0, 1.0];
         assert!(matches!(fractional_octave_power(&neg, 8, 1.0, 3.0), Err(DspError::InvalidParameter { .. })));
-        assert!(matches!(smoothed_minimum_phase(&[1.0, 0.0], 2, 1.0, 3.0), Err(DspError::InvalidParameter { .. })));
-        assert!(smoothed_minimum_phase(&[0.0; 8], 0, 1.0, 3.0).is_err(), "all zero: no magnitude to give a phase");
+        assert!(matches!(minimum_phase_response(&[1.0; 5], 8, 2, 2), Err(DspError::InvalidParameter { .. })));
+        assert!(matches!(minimum_phase_response(&[1.0; 5], 8, 12, 2), Err(DspError::InvalidParameter { .. })));
+        assert!(minimum_phase_response(&[0.0; 5], 8, 4, 0).is_err(), "all zero: no magnitude to give a phase");
+        assert!(fractional_octave_power_in_band(&p, 8, 1.0, 3.0, (0.4, 0.1)).is_err(), "band upside down");
     }
 
     #[test]
@@ -153,7 +294,11 @@ mod tests {
         for (i, v) in ir[pre..].iter_mut().enumerate() {
             *v = 0.1 * 0.9f64.powi(i as i32);
         }
-        let out = smoothed_minimum_phase(&ir, pre, 24_000.0, 24.0).unwrap();
+        let n = fft::fast_len(2 * ir.len()).unwrap();
+        let power: Vec<f64> = fft::forward(&ir, n).unwrap().iter().map(Complex64::norm_sqr).collect();
+        let smoothed = fractional_octave_power(&power, n, 24_000.0, 24.0).unwrap();
+        let magnitude: Vec<f64> = smoothed.iter().map(|p| p.sqrt()).collect();
+        let out = minimum_phase_response(&magnitude, n, ir.len(), pre).unwrap();
         assert!(out[..pre].iter().all(|v| *v == 0.0));
         let error: f64 = out.iter().zip(&ir).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
         let energy: f64 = ir.iter().map(|v| v * v).sum();

@@ -1,0 +1,115 @@
+//! Real linear least squares by Householder QR, for the small dense problems inside the DSP routines (tens of
+//! unknowns, hundreds or thousands of equations), where a linear-algebra crate would be a heavy dependency.
+
+use crate::error::{DspError, check_signal};
+
+/// The `x` minimising `|A x - b|` for the `rows x cols` matrix `a` (row-major) and `b` (`rows` values), by
+/// Householder QR (never the normal equations, whose condition number is the square of `A`'s).
+///
+/// Valid range: `1 <= cols <= rows`, finite entries, `A` of full column rank: a column whose remaining norm falls
+/// below `1e-12` times the largest column norm is refused (the problem is rank-deficient and `x` not unique).
+///
+/// # Errors
+/// [`DspError::LengthMismatch`] for `a` or `b` of the wrong size, [`DspError::InvalidParameter`] for `cols` out of
+/// range or a rank-deficient `A`, [`DspError::NonFinite`] for a non-finite entry.
+pub fn least_squares(a: &[f64], rows: usize, cols: usize, b: &[f64]) -> Result<Vec<f64>, DspError> {
+    if cols == 0 || cols > rows {
+        return Err(DspError::InvalidParameter {
+            name: "cols",
+            reason: format!("must be 1 to rows ({rows}), got {cols}"),
+        });
+    }
+    if a.len() != rows * cols {
+        return Err(DspError::LengthMismatch {
+            what: "matrix entries against rows x cols",
+            a: a.len(),
+            b: rows * cols,
+        });
+    }
+    if b.len() != rows {
+        return Err(DspError::LengthMismatch { what: "right-hand side against rows", a: b.len(), b: rows });
+    }
+    check_signal("matrix", a)?;
+    check_signal("right-hand side", b)?;
+    let mut r = a.to_vec();
+    let mut y = b.to_vec();
+    let at = |i: usize, j: usize| i * cols + j;
+    let largest = (0..cols).map(|j| (0..rows).map(|i| r[at(i, j)].powi(2)).sum::<f64>().sqrt()).fold(0.0, f64::max);
+    for j in 0..cols {
+        let norm = (j..rows).map(|i| r[at(i, j)].powi(2)).sum::<f64>().sqrt();
+        if norm <= 1e-12 * largest || norm == 0.0 {
+            return Err(DspError::InvalidParameter {
+                name: "a",
+                reason: format!("is rank-deficient: column {j} is a combination of the ones before it"),
+            });
+        }
+        // The reflection that maps column j below the diagonal onto -sign(r_jj) |.| e_j, avoiding cancellation.
+        let alpha = if r[at(j, j)] > 0.0 { -norm } else { norm };
+        let mut v: Vec<f64> = (j..rows).map(|i| r[at(i, j)]).collect();
+        v[0] -= alpha;
+        let v_norm_sqr: f64 = v.iter().map(|x| x * x).sum();
+        for c in j..cols {
+            let dot: f64 = v.iter().enumerate().map(|(i, vi)| vi * r[at(j + i, c)]).sum();
+            let scale = 2.0 * dot / v_norm_sqr;
+            v.iter().enumerate().for_each(|(i, vi)| r[at(j + i, c)] -= scale * vi);
+        }
+        let dot: f64 = v.iter().enumerate().map(|(i, vi)| vi * y[j + i]).sum();
+        let scale = 2.0 * dot / v_norm_sqr;
+        v.iter().enumerate().for_each(|(i, vi)| y[j + i] -= scale * vi);
+    }
+    // Back substitution on the upper triangle R x = (Q^T b)[..cols].
+    let mut x = vec![0.0; cols];
+    for j in (0..cols).rev() {
+        let tail: f64 = (j + 1..cols).map(|c| r[at(j, c)] * x[c]).sum();
+        x[j] = (y[j] - tail) / r[at(j, j)];
+    }
+    crate::error::check_result("least-squares solution", &x)?;
+    Ok(x)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    #[test]
+    fn a_line_fit_recovers_its_coefficients_and_a_square_system_is_solved_exactly() {
+        // y = 2 - 3 t at 50 points, exactly: the fit returns (2, -3) to rounding.
+        let t: Vec<f64> = (0..50).map(|i| i as f64 / 7.0).collect();
+        let a: Vec<f64> = t.iter().flat_map(|t| [1.0, *t]).collect();
+        let b: Vec<f64> = t.iter().map(|t| 2.0 - 3.0 * t).collect();
+        let x = least_squares(&a, 50, 2, &b).unwrap();
+        assert!((x[0] - 2.0).abs() < 1e-12 && (x[1] + 3.0).abs() < 1e-12, "{x:?}");
+        // Residual orthogonal to the columns: y = t^2 fitted by a line leaves A^T r = 0.
+        let b2: Vec<f64> = t.iter().map(|t| t * t).collect();
+        let x = least_squares(&a, 50, 2, &b2).unwrap();
+        let r: Vec<f64> = t.iter().zip(&b2).map(|(t, y)| y - x[0] - x[1] * t).collect();
+        assert!(r.iter().sum::<f64>().abs() < 1e-9 && r.iter().zip(&t).map(|(r, t)| r * t).sum::<f64>().abs() < 1e-9);
+        let x = least_squares(&[0.0, 1.0, 1.0, 0.0], 2, 2, &[3.0, 4.0]).unwrap();
+        assert_eq!(x, vec![4.0, 3.0], "a permutation: no rounding at all");
+    }
+
+    #[test]
+    fn an_ill_conditioned_fit_stays_accurate_and_a_singular_one_is_refused() {
+        // Columns 1 and 1 + 1e-7 t: condition number ~1e8, fine for QR (its square, 1e16, would ruin the normal
+        // equations). The exact solution (1, 1) comes back to about cond * eps = 1e-8.
+        let t: Vec<f64> = (0..20).map(|i| i as f64).collect();
+        let a: Vec<f64> = t.iter().flat_map(|t| [1.0, 1.0 + 1e-7 * t]).collect();
+        let b: Vec<f64> = t.iter().map(|t| 2.0 + 1e-7 * t).collect();
+        let x = least_squares(&a, 20, 2, &b).unwrap();
+        assert!((x[0] - 1.0).abs() < 1e-6 && (x[1] - 1.0).abs() < 1e-6, "{x:?}");
+        let dup: Vec<f64> = t.iter().flat_map(|t| [*t, *t]).collect();
+        assert!(matches!(least_squares(&dup, 20, 2, &b), Err(DspError::InvalidParameter { .. })));
+        assert!(matches!(least_squares(&[0.0; 4], 2, 2, &[1.0, 1.0]), Err(DspError::InvalidParameter { .. })));
+    }
+
+    #[test]
+    fn bad_shapes_and_values_are_refused() {
+        assert!(matches!(least_squares(&[1.0; 4], 2, 3, &[1.0; 2]), Err(DspError::InvalidParameter { .. })));
+        assert!(matches!(least_squares(&[1.0; 4], 2, 0, &[1.0; 2]), Err(DspError::InvalidParameter { .. })));
+        assert!(matches!(least_squares(&[1.0; 3], 2, 2, &[1.0; 2]), Err(DspError::LengthMismatch { .. })));
+        assert!(matches!(least_squares(&[1.0; 4], 2, 2, &[1.0; 3]), Err(DspError::LengthMismatch { .. })));
+        assert!(matches!(least_squares(&[1.0, f64::NAN, 0.0, 1.0], 2, 2, &[1.0; 2]), Err(DspError::NonFinite { .. })));
+    }
+}
