@@ -14,30 +14,14 @@ use metaplate_analysis::pixel::{PixelAreaOptions, pixel_area_map};
 use metaplate_control::PropagationMatrices;
 use metaplate_control::focal::single_pixel_focal_fields;
 use metaplate_core::scene::Scene;
-use metaplate_plate::{GreensRequest, ModelOptions, greens_functions};
+use metaplate_ground_truth::{GroundTruth, GroundTruthOptions};
 
+/// The metamaterial plate's compensated ground truth over `band_hz`, from the tests' cache (target/tmp).
 fn ground_truth(band_hz: (f64, f64)) -> (Scene, PropagationMatrices) {
-    let scene = Scene::builtin("metamaterial").unwrap();
-    let request = GreensRequest {
-        points: scene.measured_points(),
-        actuators: (0..scene.actuators.len()).collect(),
-        band_hz: (40.0, 700.0),
-        duration_s: 0.5,
-        sample_rate_hz: 2000.0,
-    };
-    // The tests' cache (same request): target/tmp/greens-cache.
     let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/tmp/greens-cache");
-    std::fs::create_dir_all(&cache).unwrap();
-    let greens = greens_functions(&scene, &ModelOptions::default(), &request, Some(&cache)).unwrap();
-    let g = PropagationMatrices::from_impulse_responses(
-        greens.points.iter().map(|&p| p as u32).collect(),
-        greens.actuators.iter().map(|&a| a as u16).collect(),
-        greens.sample_rate_hz,
-        band_hz,
-        |m, n| greens.ir(m, n),
-    )
-    .unwrap();
-    (scene, g)
+    let truth = GroundTruth::builtin("metamaterial", &GroundTruthOptions::default(), Some(&cache)).unwrap();
+    let g = truth.propagation(band_hz).unwrap();
+    (truth.scene, g)
 }
 
 fn export(path: &str, g: &PropagationMatrices, scene: &Scene) {

@@ -1,16 +1,17 @@
 //! Fits a scene's resonator parameters against the paper: prints the k-space (and plate-equation) median wavelength
-//! at 75 / 150 / 250 / 400 / 600 Hz and the median virtual-pixel area of the ground truth (full grid, 8 actuators,
-//! the same request as tests/pixel_area.rs), for a built-in scene or a scene file:
+//! at 75 / 150 / 250 / 400 / 600 Hz and the median virtual-pixel area of the ground truth (8 actuators, compensated
+//! as in tests/pixel_area.rs and uncompensated, on the full grid and on every other point as the demo scans), for a
+//! built-in scene or a scene file:
 //! `cargo run --release -p metaplate-analysis --example pixel_fit -- SCENE [SCENE...]`
 //! (environment: `NO_AREA=1` for the wavelengths only).
 #![allow(clippy::unwrap_used)] // a report on fixed inputs: a failure is a bug to see at once
 
 use metaplate_analysis::dispersion::{DispersionOptions, SceneLayout, wavelengths_at};
 use metaplate_analysis::pixel::{PixelAreaOptions, pixel_area_map};
-use metaplate_control::PropagationMatrices;
 use metaplate_control::solve::Method;
 use metaplate_core::scene::Scene;
-use metaplate_plate::{GreensRequest, ModelOptions, PlateModel, greens_functions};
+use metaplate_ground_truth::{GroundTruth, GroundTruthOptions};
+use metaplate_plate::{ModelOptions, PlateModel};
 
 const FREQS_HZ: [f64; 5] = [75.0, 150.0, 250.0, 400.0, 600.0];
 
@@ -35,36 +36,37 @@ fn wavelengths(scene: &Scene) {
 }
 
 fn pixel_areas(scene: &Scene) {
-    let request = GreensRequest {
-        points: scene.measured_points(),
-        actuators: (0..scene.actuators.len()).collect(),
-        band_hz: (40.0, 700.0),
-        duration_s: 0.5,
-        sample_rate_hz: 2000.0,
-    };
-    let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/tmp/pixel-fit-cache");
-    std::fs::create_dir_all(&cache).unwrap();
-    let started = std::time::Instant::now();
-    let greens = greens_functions(scene, &ModelOptions::default(), &request, Some(&cache)).unwrap();
-    let g = PropagationMatrices::from_impulse_responses(
-        greens.points.iter().map(|&p| p as u32).collect(),
-        greens.actuators.iter().map(|&a| a as u16).collect(),
-        greens.sample_rate_hz,
-        (75.0, 400.0),
-        |m, n| greens.ir(m, n),
-    )
-    .unwrap();
-    let options = PixelAreaOptions::default();
-    let map = pixel_area_map(&g, &scene.grid, &scene.grid_mask(), &options).unwrap();
-    let tr = PixelAreaOptions { method: Method::TimeReversal, ..options };
-    let tr_map = pixel_area_map(&g, &scene.grid, &scene.grid_mask(), &tr).unwrap();
-    println!(
-        "  pixel area: median {:.2} cm^2 ({:.0} % flagged), time reversal {:.2} cm^2 ({:.1} s)",
-        map.median_area_cm2().unwrap_or(f64::NAN),
-        100.0 * map.flagged_fraction(),
-        tr_map.median_area_cm2().unwrap_or(f64::NAN),
-        started.elapsed().as_secs_f64()
-    );
+    let cache = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/tmp/greens-cache");
+    let compensated = GroundTruthOptions::default();
+    let uncompensated = GroundTruthOptions { compensation: None, ..GroundTruthOptions::default() };
+    for (label, options) in [("compensated", compensated), ("uncompensated", uncompensated)] {
+        let started = std::time::Instant::now();
+        let truth = GroundTruth::new(scene.clone(), &options, Some(&cache)).unwrap();
+        let g = truth.propagation((75.0, 400.0)).unwrap();
+        // The demo's default scan grid: every other point of each row and column.
+        let grid = scene.grid;
+        let rows: Vec<usize> = (0..g.n_points())
+            .filter(|&r| {
+                let p = g.points()[r] as usize;
+                (p % grid.nx).is_multiple_of(2) && (p / grid.nx).is_multiple_of(2)
+            })
+            .collect();
+        let coarse = g.select_rows(&rows).unwrap();
+        for (grid_label, g) in [("full grid", &g), ("every other point", &coarse)] {
+            let options = PixelAreaOptions::default();
+            let map = pixel_area_map(g, &scene.grid, &scene.grid_mask(), &options).unwrap();
+            let tr = PixelAreaOptions { method: Method::TimeReversal, ..options };
+            let tr_map = pixel_area_map(g, &scene.grid, &scene.grid_mask(), &tr).unwrap();
+            println!(
+                "  {label}, {grid_label}: pixel area median {:.2} cm^2 ({:.0} % flagged), time reversal {:.2} cm^2 \
+                 ({:.1} s)",
+                map.median_area_cm2().unwrap_or(f64::NAN),
+                100.0 * map.flagged_fraction(),
+                tr_map.median_area_cm2().unwrap_or(f64::NAN),
+                started.elapsed().as_secs_f64()
+            );
+        }
+    }
 }
 
 fn main() {

@@ -277,6 +277,36 @@ impl PropagationMatrices {
         Ok(Self { points, ..self.clone() })
     }
 
+    /// The same matrices restricted to the bins whose frequency lies in `band_hz = (lo, hi)` (inclusive): what a
+    /// narrower operating band sees of a dataset loaded over a wider one.
+    ///
+    /// # Errors
+    /// [`ControlError::InvalidParameter`] unless `0 <= lo < hi` (finite); [`ControlError::EmptyBand`] when none of
+    /// the bins falls in the band.
+    pub fn select_band(&self, band_hz: (f64, f64)) -> Result<Self, ControlError> {
+        let wanted = band_bins(band_hz, self.fft_len, self.sample_rate_hz)?;
+        let bins = wanted.start.max(self.bins.start)..wanted.end.min(self.bins.end);
+        if bins.is_empty() {
+            return Err(ControlError::EmptyBand {
+                lo_hz: band_hz.0,
+                hi_hz: band_hz.1,
+                spacing_hz: self.sample_rate_hz / self.fft_len as f64,
+                nyquist_hz: self.sample_rate_hz / 2.0,
+            });
+        }
+        let (first, count) = (bins.start - self.bins.start, bins.len());
+        let size = self.points.len() * self.actuators.len();
+        Ok(Self {
+            freqs_hz: self.freqs_hz[first..first + count].to_vec(),
+            bins,
+            points: self.points.clone(),
+            actuators: self.actuators.clone(),
+            fft_len: self.fft_len,
+            sample_rate_hz: self.sample_rate_hz,
+            data: self.data[first * size..(first + count) * size].to_vec(),
+        })
+    }
+
     /// The sub-matrices for the rows `rows` (positions into [`Self::points`], any order, duplicates allowed).
     ///
     /// # Errors

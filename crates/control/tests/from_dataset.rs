@@ -96,3 +96,23 @@ fn missing_points_short_ffts_and_empty_bands_are_errors() {
         Err(ControlError::EmptyBand { .. })
     ));
 }
+
+#[test]
+fn a_sub_band_equals_loading_the_narrower_band() {
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = write_dataset(dir.path());
+    let wide = PropagationMatrices::from_dataset(&dataset, (0.0, 12_000.0), None).unwrap();
+    let narrow = PropagationMatrices::from_dataset(&dataset, (1000.0, 5000.0), None).unwrap();
+    let cut = wide.select_band((1000.0, 5000.0)).unwrap();
+    assert_eq!(cut.bins(), narrow.bins());
+    assert_eq!(cut.freqs_hz(), narrow.freqs_hz());
+    for k in 0..narrow.n_bins() {
+        // The same FFTs of the same samples: bit-identical.
+        assert_eq!(cut.at_bin(k).unwrap(), narrow.at_bin(k).unwrap(), "bin {k}");
+    }
+    // A band partly outside keeps the bins it shares; one sharing none is an empty band, like one between bins.
+    assert_eq!(narrow.select_band((0.0, 2000.0)).unwrap().bins(), narrow.bins().start..6);
+    assert!(matches!(narrow.select_band((6000.0, 9000.0)), Err(ControlError::EmptyBand { .. })));
+    assert!(matches!(wide.select_band((400.0, 700.0)), Err(ControlError::EmptyBand { .. })));
+    assert!(matches!(wide.select_band((700.0, 400.0)), Err(ControlError::InvalidParameter { name: "band_hz", .. })));
+}

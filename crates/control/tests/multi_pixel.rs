@@ -13,29 +13,14 @@ use metaplate_control::focal::single_pixel_focal_fields;
 use metaplate_control::render::{FocusOptions, predicted_field, solve_drives};
 use metaplate_control::target::{PixelTarget, Waveform, band_signal, spectrum};
 use metaplate_core::scene::Scene;
-use metaplate_plate::{GreensRequest, ModelOptions, greens_functions};
+use metaplate_ground_truth::{GroundTruth, GroundTruthOptions};
 
+/// The metamaterial plate's compensated ground truth over the operating band.
 fn ground_truth() -> (Scene, PropagationMatrices) {
-    let scene = Scene::builtin("metamaterial").unwrap();
-    let request = GreensRequest {
-        points: scene.measured_points(),
-        actuators: (0..scene.actuators.len()).collect(),
-        band_hz: (40.0, 700.0),
-        duration_s: 0.5,
-        sample_rate_hz: 2000.0,
-    };
     let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
-    std::fs::create_dir_all(&cache).unwrap();
-    let greens = greens_functions(&scene, &ModelOptions::default(), &request, Some(&cache)).unwrap();
-    let g = PropagationMatrices::from_impulse_responses(
-        greens.points.iter().map(|&p| p as u32).collect(),
-        greens.actuators.iter().map(|&a| a as u16).collect(),
-        greens.sample_rate_hz,
-        (75.0, 400.0),
-        |m, n| greens.ir(m, n),
-    )
-    .unwrap();
-    (scene, g)
+    let truth = GroundTruth::builtin("metamaterial", &GroundTruthOptions::default(), Some(&cache)).unwrap();
+    let g = truth.propagation((75.0, 400.0)).unwrap();
+    (truth.scene, g)
 }
 
 fn rms(x: &[f64]) -> f64 {
