@@ -67,8 +67,8 @@ pub struct FocusArgs {
 
 /// Default operating band, Hz (the paper's).
 const BAND_HZ: (f64, f64) = (75.0, 400.0);
-/// Default Tikhonov regularisation relative to the largest singular value.
-const ALPHA_RELATIVE: f64 = 0.01;
+/// Default Tikhonov regularisation relative to the largest singular value (the control crate's).
+const ALPHA_RELATIVE: f64 = metaplate_control::solve::DEFAULT_RELATIVE_ALPHA;
 
 /// How drives are solved and laid out (the options of `metaplate focus`; `metaplate demo` uses the defaults).
 #[derive(Args, Debug, Clone)]
