@@ -132,7 +132,8 @@ fn simulate_dispersion_prints_the_documented_json() {
     let p = &v["points"][0];
     assert_eq!(p["freq_hz"], 300.0);
     let (lambda, a0) = (p["wavelength_m"].as_f64().unwrap(), p["a0_wavelength_m"].as_f64().unwrap());
-    // The metamaterial's waves at 300 Hz are 5.3 cm (plate tests); on the coarse lattice a few % shorter. A0: 12.7 cm.
-    assert!((0.045..0.06).contains(&lambda), "{lambda}");
+    // The metamaterial's waves at 300 Hz are 4.3 cm (plate tests; 4.4 by k-space); on the coarse lattice a few %
+    // shorter (4.16 cm measured). A0: 12.7 cm, so anything near A0 or the grid's 1 cm fails.
+    assert!((0.038..0.047).contains(&lambda), "{lambda}");
     assert!((a0 - 0.1268).abs() < 0.001, "{a0}");
 }

@@ -30,7 +30,7 @@ fn builtins_load_validate_and_transcribe_the_paper() {
         assert!(s.faults.is_empty());
     }
     let meta = Scene::builtin("metamaterial").unwrap();
-    assert_eq!(meta.resonators.model, ResonatorModel::AddedMass);
+    assert_eq!(meta.resonators.model, ResonatorModel::RockingRod);
     assert_eq!((meta.resonators.pitch_m, meta.resonators.rod_height_m), (0.008, 0.0334));
     assert_eq!(Scene::builtin("homogeneous").unwrap().resonators.model, ResonatorModel::None);
     assert!(matches!(Scene::builtin("aluminium"), Err(SceneError::NotFound { .. })));
@@ -164,9 +164,12 @@ fn resonator_lattice_and_mass_ratio() {
     // Rod mass / plate mass per cell, 19.8165 by hand (see metamaterial.toml); 1e-4 is the hand value's rounding.
     let ratio = s.resonators.cell_mass_ratio(s.plate.mass_per_area_kg_m2()).unwrap();
     assert!((ratio - 19.8165).abs() < 1e-4, "{ratio}");
-    // The built-in carries fitted effective overrides (the plate model's dispersion tests own their values).
-    assert!(s.resonators.mass_ratio.is_some_and(|mu| mu > 1.0), "{:?}", s.resonators.mass_ratio);
-    assert!(s.resonators.resonance_hz.is_some_and(|f| f > 600.0), "{:?}", s.resonators.resonance_hz);
+    // The built-in keeps the rods' own mass and resonance and carries one fitted override, a radius of gyration
+    // below a rigid rod's L / sqrt(3) (the plate model's dispersion tests own its value).
+    assert_eq!((s.resonators.mass_ratio, s.resonators.resonance_hz), (None, None));
+    let rigid_m = s.resonators.rod_height_m / 3f64.sqrt();
+    assert!(s.resonators.gyration_radius_m.is_some_and(|r| r > 0.0 && r < rigid_m), "{:?}", s.resonators);
+    assert!(s.resonators.gyration_radius_m() < rigid_m);
     let homo = Scene::builtin("homogeneous").unwrap();
     assert!(homo.resonators.lattice_sites_m(&homo.plate.outline).unwrap().is_empty());
     assert!(homo.resonators.cell_mass_ratio(homo.plate.mass_per_area_kg_m2()).is_err(), "0/0 is refused");
@@ -350,7 +353,24 @@ fn every_validation_error_names_file_key_and_reason() {
             "no lattice site",
         ),
         (mutate("height_spread = 0.01", "height_spread = 0.7"), Kind::Invalid, "resonators.height_spread", "[0, 0.5)"),
-        (mutate("\nmass_ratio = ", "\nmass_ratio = -1.0\n# was "), Kind::Invalid, "resonators.mass_ratio", "> 0"),
+        (
+            mutate("height_spread = 0.01", "height_spread = 0.01\nmass_ratio = -1.0"),
+            Kind::Invalid,
+            "resonators.mass_ratio",
+            "> 0",
+        ),
+        (
+            mutate("gyration_radius_m = 0.011", "gyration_radius_m = -0.011"),
+            Kind::Invalid,
+            "resonators.gyration_radius_m",
+            "> 0",
+        ),
+        (
+            mutate("gyration_radius_m = 0.011", "gyration_radius_m = 0.05"),
+            Kind::Invalid,
+            "resonators.gyration_radius_m",
+            "exceeds the rod height",
+        ),
         (mutate("x_m = 0.1075", "x_m = 0.2075"), Kind::Invalid, "actuators[0]", "off the plate"),
         (
             mutate("x_m = 0.0075\ny_m = 0.0575", "x_m = 0.03\ny_m = 0.0575"),

@@ -7,12 +7,13 @@
 //!   local-resonance literature, with its own loss). Homogenised, the A0 dispersion becomes
 //!   `D k^4 = rho h w^2 [1 + mu w_r^2 / (w_r^2 - w^2)]`.
 //! - `RockingRod`: the rod moves with the plate (static mass `m`) and rocks with the plate's slope about its base,
-//!   through a compliant joint resonating at `f_r`: rotary inertia `J = m L^2 / 3` per cell, dynamic
+//!   through a compliant joint resonating at `f_r`: rotary inertia `J = m r_g^2` per cell (`r_g` the radius of
+//!   gyration about the base, `L / sqrt(3)` for a rigid rod unless the scene fits it), dynamic
 //!   `J w_r^2 (1 + i eta_r) / (w_r^2 (1 + i eta_r) - w^2)`, entering as `-w^2 div(J grad w)` (a Laplacian-shaped
 //!   mass matrix). It alone gives a slow, nearly non-dispersive wave `c = sqrt(D a^2 / J)`.
 //!
 //! Rod heights spread by the scene's `height_spread` (relative standard deviation, drawn from the seed): a rod of
-//! relative height `s` has mass `s m`, length `s L` and resonance `f_r / s^2` (a cantilever's scaling).
+//! relative height `s` has mass `s m`, length `s L` (and radius of gyration `s r_g`) and resonance `f_r / s^2` (a cantilever's scaling).
 //! Defaults when the scene gives no override: `mu` from the rod and plate densities, `f_r` the first mode of the rod
 //! clamped at its base, `(1.875^2 / 2 pi) (d / 4) sqrt(E / rho) / L^2` (an upper bound: the real plate is compliant).
 
@@ -123,7 +124,7 @@ impl Resonators {
             out.resonant_inertia = rotary_entries(mesh, pattern, &rod_at, &site_key, |rod| {
                 // J / a^2 per unit area, and 1/2 per cell edge (each gradient component is averaged over two edges).
                 let s = heights[rod];
-                0.5 * s * mass_per_area * (s * spec.rod_height_m).powi(2) / 3.0
+                0.5 * s * mass_per_area * (s * spec.gyration_radius_m()).powi(2)
             })?;
         }
         Ok(out)

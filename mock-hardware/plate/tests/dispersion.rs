@@ -97,21 +97,17 @@ fn homogeneous_matches_analytic_a0_within_5_percent() {
     }
 }
 
-#[test]
-fn metamaterial_plate_equation_matches_the_homogenised_dispersion() {
-    // The rods, homogenised, are a resonant added mass: D k^4 = rho h w^2 [1 + mu w_r^2 / (w_r^2 - w^2)]
-    // (`metaplate_plate` resonators docs), so the metamaterial obeys one plate equation with an effective mass and
-    // its wavelength is A0's divided by that bracket to the 1/4.
-    let scene = Scene::builtin("metamaterial").unwrap();
+/// Checks the plate-equation wavelength of `scene` against `homogenised(f)` at every frequency of the band, within the
+/// tolerance of the discretisation (plus `extra_tolerance`, relative) where the estimator is in range.
+fn check_homogenised(scene: &Scene, extra_tolerance: f64, homogenised: impl Fn(f64) -> f64) {
     let options = ModelOptions::default();
-    let model = PlateModel::from_scene(&scene, &options).unwrap();
-    let (mu, f_r) = metaplate_plate::effective_parameters(&scene).unwrap();
+    let model = PlateModel::from_scene(scene, &options).unwrap();
     let lattice_m = scene.grid.spacing_m / options.refinement as f64;
     println!("{:>6} {:>9} {:>9} {:>9} {:>8} {:>8}", "f Hz", "eff cm", "local cm", "k cm", "local %", "k/local %");
+    let mut misses = Vec::new();
     for f in FREQS_HZ {
-        let effective =
-            scene.plate.a0_wavelength_m(f).unwrap() / (1.0 + mu * f_r * f_r / (f_r * f_r - f * f)).powf(0.25);
-        let w = wavelengths(&scene, &model, f);
+        let effective = homogenised(f);
+        let w = wavelengths(scene, &model, f);
         let local = local_median(&w);
         let k_space = w.k_space_summary.median_m;
         println!(
@@ -124,7 +120,7 @@ fn metamaterial_plate_equation_matches_the_homogenised_dispersion() {
         );
         let summary = w.local_summary.unwrap();
         if summary.flagged > 0 {
-            // 600 Hz: 2.5 cm is under 6 grid steps, outside the estimator's stated range, and it says so.
+            // Under 6 grid steps is outside the estimator's stated range, and it says so.
             assert!(local < 6.0 * scene.grid.spacing_m, "{f} Hz: flagged at {local} m");
             continue;
         }
@@ -133,21 +129,61 @@ fn metamaterial_plate_equation_matches_the_homogenised_dispersion() {
         // and 0.5 % covers what the formula leaves out (the rods' 1 % height spread and their own loss, the
         // rod-free 1 cm strip along the edge that some stencils reach). Measured: within 0.7 % up to 500 Hz.
         let k = 2.0 * PI / effective;
-        let tolerance = (k * lattice_m).powi(2) / 24.0 + (k * scene.grid.spacing_m).powi(2) / 96.0 + 0.005;
-        assert!((local / effective - 1.0).abs() < tolerance, "{f} Hz: local {local} m, homogenised {effective} m");
+        let tolerance =
+            (k * lattice_m).powi(2) / 24.0 + (k * scene.grid.spacing_m).powi(2) / 96.0 + 0.005 + extra_tolerance;
+        if (local / effective - 1.0).abs() >= tolerance {
+            misses.push(format!("{f} Hz: local {local} m, homogenised {effective} m, tolerance {tolerance}"));
+        }
     }
+    assert!(misses.is_empty(), "{misses:#?}");
+}
+
+#[test]
+fn added_mass_rods_obey_the_homogenised_dispersion() {
+    // Rods as a resonant added mass, homogenised: D k^4 = rho h w^2 [1 + mu w_r^2 / (w_r^2 - w^2)]
+    // (`metaplate_plate` resonators docs), so the plate obeys one plate equation with an effective mass and its
+    // wavelength is A0's divided by that bracket to the 1/4. The parameters are the added-mass fit to the paper's
+    // two measured wavelengths (the built-in scene's before the rocking model replaced it).
+    let mut scene = Scene::builtin("metamaterial").unwrap();
+    scene.resonators.model = metaplate_core::scene::ResonatorModel::AddedMass;
+    (scene.resonators.mass_ratio, scene.resonators.resonance_hz) = (Some(24.0), Some(650.0));
+    let (mu, f_r) = metaplate_plate::effective_parameters(&scene).unwrap();
+    check_homogenised(&scene, 0.0, |f| {
+        scene.plate.a0_wavelength_m(f).unwrap() / (1.0 + mu * f_r * f_r / (f_r * f_r - f * f)).powf(0.25)
+    });
+}
+
+#[test]
+fn rocking_rods_obey_the_homogenised_dispersion() {
+    // Rods that move with the plate (mass mu rho h per area) and rock with its slope (rotary inertia
+    // J = mu rho h r_g^2 per area, resonant at f_r), homogenised: D k^4 - w^2 J R k^2 - w^2 rho h (1 + mu) = 0 with
+    // R = w_r^2 / (w_r^2 - w^2), a quadratic in k^2 whose positive root is the propagating wave.
+    let scene = Scene::builtin("metamaterial").unwrap();
+    let (mu, f_r) = metaplate_plate::effective_parameters(&scene).unwrap();
+    let rho_h = scene.plate.mass_per_area_kg_m2();
+    let d = scene.plate.bending_stiffness_n_m();
+    let inertia = mu * rho_h * scene.resonators.gyration_radius_m().powi(2);
+    // The plate-equation estimator assumes laplacian^2 w = k^4 w. A plain plate's evanescent companion wave has the
+    // same k^4, but the rocking rods' does not (its k_2 has k^2 - k_2^2 = w^2 J / D), so where edges and sources lie
+    // within its decay length, at 75 and 100 Hz, the estimate reads up to 0.8 % short. The same residual at
+    // refinement 3 (0.5 and 0.7 %) shows it is not the discretisation; 0.5 % more covers it.
+    check_homogenised(&scene, 0.005, |f| {
+        let w2 = (2.0 * PI * f).powi(2);
+        let j = inertia * f_r * f_r / (f_r * f_r - f * f);
+        let k2 = (w2 * j + ((w2 * j).powi(2) + 4.0 * d * rho_h * (1.0 + mu) * w2).sqrt()) / (2.0 * d);
+        2.0 * PI / k2.sqrt()
+    });
 }
 
 #[test]
 fn rocking_rods_slow_waves_more_than_the_same_rods_as_added_mass() {
-    // Rocking rods add rotary inertia J = m L^2 / 3 on top of the rods' mass, a term -w^2 J laplacian(w) that
+    // Rocking rods add rotary inertia J = m r_g^2 on top of the rods' mass, a term -w^2 J laplacian(w) that
     // shortens waves further; with the rods' own (derived) parameters both models run, and rocking is shorter.
     use metaplate_core::scene::ResonatorModel;
-    let mut added = Scene::builtin("metamaterial").unwrap();
-    added.resonators.mass_ratio = None;
-    added.resonators.resonance_hz = None;
-    let mut rocking = added.clone();
-    rocking.resonators.model = ResonatorModel::RockingRod;
+    let mut rocking = Scene::builtin("metamaterial").unwrap();
+    rocking.resonators.gyration_radius_m = None;
+    let mut added = rocking.clone();
+    added.resonators.model = ResonatorModel::AddedMass;
     let options = ModelOptions { refinement: 2, threads: 1 };
     let l_added = k_space_median(&added, &PlateModel::from_scene(&added, &options).unwrap(), 300.0);
     let l_rocking = k_space_median(&rocking, &PlateModel::from_scene(&rocking, &options).unwrap(), 300.0);

@@ -28,7 +28,7 @@ pub enum ResonatorModel {
 /// valid range (checked by [`crate::scene::Scene::validate`]) is: finite `pitch_m`, `rod_height_m`,
 /// `rod_diameter_m`, `rod_youngs_modulus_pa`, `rod_density_kg_m3` all `> 0`; `rod_diameter_m < pitch_m`;
 /// `loss_factor >= 0`; `region_inset_m >= 0` and leaving some plate; `0 <= height_spread < 0.5`; overrides,
-/// when present, `> 0`; at most [`MAX_RESONATORS`] rods.
+/// when present, `> 0`, and `gyration_radius_m <= rod_height_m`; at most [`MAX_RESONATORS`] rods.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "ResonatorFile")]
 pub struct ResonatorSpec {
@@ -58,6 +58,10 @@ pub struct ResonatorSpec {
     /// the rod by the plate model.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub resonance_hz: Option<f64>,
+    /// Effective-model override (`rocking_rod` only): the rod's radius of gyration about its base, m, so that its
+    /// rotary inertia is `m r^2`. When absent, a rigid rod pivoting at its base: `rod_height_m / sqrt(3)`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gyration_radius_m: Option<f64>,
 }
 
 impl ResonatorSpec {
@@ -75,7 +79,14 @@ impl ResonatorSpec {
             height_spread: 0.0,
             mass_ratio: None,
             resonance_hz: None,
+            gyration_radius_m: None,
         }
+    }
+
+    /// Radius of gyration of a rod of the mean height about its base, m: the override, or a rigid rod's
+    /// `rod_height_m / sqrt(3)`.
+    pub fn gyration_radius_m(&self) -> f64 {
+        self.gyration_radius_m.unwrap_or(self.rod_height_m / 3f64.sqrt())
     }
 
     /// Mass of one rod of the mean height, `rho pi d^2 / 4 h`, kg.
@@ -140,6 +151,7 @@ struct ResonatorFile {
     height_spread: Option<f64>,
     mass_ratio: Option<f64>,
     resonance_hz: Option<f64>,
+    gyration_radius_m: Option<f64>,
 }
 
 impl TryFrom<ResonatorFile> for ResonatorSpec {
@@ -165,6 +177,7 @@ impl TryFrom<ResonatorFile> for ResonatorSpec {
             height_spread: f.height_spread.unwrap_or(0.0),
             mass_ratio: f.mass_ratio,
             resonance_hz: f.resonance_hz,
+            gyration_radius_m: f.gyration_radius_m,
         })
     }
 }

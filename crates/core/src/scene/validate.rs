@@ -154,6 +154,16 @@ impl Scene {
         if let Some(f) = r.resonance_hz {
             positive("resonators.resonance_hz", f, "Hz")?;
         }
+        if let Some(g) = r.gyration_radius_m {
+            positive("resonators.gyration_radius_m", g, "m")?;
+            // All of the rod's mass at its tip is the largest radius a rod of this height can have.
+            if g > r.rod_height_m {
+                return problem(
+                    "resonators.gyration_radius_m",
+                    format!("{g} m exceeds the rod height {} m (no rod can have it)", r.rod_height_m),
+                );
+            }
+        }
         match r.lattice_sites_m(&self.plate.outline) {
             Ok(sites) if sites.is_empty() => problem(
                 "resonators.region_inset_m",
