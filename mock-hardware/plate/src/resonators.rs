@@ -13,7 +13,8 @@
 //!   mass matrix). It alone gives a slow, nearly non-dispersive wave `c = sqrt(D a^2 / J)`.
 //!
 //! Rod heights spread by the scene's `height_spread` (relative standard deviation, drawn from the seed): a rod of
-//! relative height `s` has mass `s m`, length `s L` (and radius of gyration `s r_g`) and resonance `f_r / s^2` (a cantilever's scaling).
+//! relative height `s` has mass `s m`, length `s L`, radius of gyration `s r_g` and resonance `f_r / s^2` (a
+//! cantilever's scaling).
 //! Defaults when the scene gives no override: `mu` from the rod and plate densities, `f_r` the first mode of the rod
 //! clamped at its base, `(1.875^2 / 2 pi) (d / 4) sqrt(E / rho) / L^2` (an upper bound: the real plate is compliant).
 
