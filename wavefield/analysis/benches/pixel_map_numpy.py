@@ -1,7 +1,7 @@
 """Independent NumPy implementation of the pixel-area map's focal fields (benches/pixel_map.rs), timed on the same G.
 
 Usage: PIXEL_MAP_EXPORT=/tmp/G.bin cargo bench -p metaplate-analysis --bench pixel_map   (writes G once)
-       python3 crates/analysis/benches/pixel_map_numpy.py /tmp/G.bin
+       python3 wavefield/analysis/benches/pixel_map_numpy.py /tmp/G.bin
 
 For each target point j (single-pixel inverse filter, closed form, relative Tikhonov 0.01) the field at focus time at
 every point i is  v_i = sum_k (c_k / N) w_k / (|g_jk|^2 (1 + 0.01^2)) Re(G_ik . conj(g_jk)),  computed here as one

@@ -5,7 +5,7 @@
 //! schedule and a random seed. All quantities are SI (lengths in metres, frequencies in hertz); the unit is in each
 //! key's name. Coordinates are centred on the plate's centre, x along the long axis.
 //!
-//! The built-in scenes are the paper's two plates, `metamaterial` and `homogeneous` (files in `crates/core/scenes/`).
+//! The built-in scenes are the paper's two plates, `metamaterial` and `homogeneous` (files in `foundation/core/scenes/`).
 //! A user's file is checked key by key: an unknown key, a missing key, a value of the wrong type or outside its
 //! valid range is a [`SceneError`] naming the file, line and key path, never a panic.
 

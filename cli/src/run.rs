@@ -27,7 +27,7 @@ pub struct Source {
     /// runs the real drivers on a virtual clock, so hours of measurement take minutes.
     #[arg(long)]
     pub scene: Option<String>,
-    /// Run on the real instruments named in this hardware file (format: `crates/cli/hardware.example.toml`).
+    /// Run on the real instruments named in this hardware file (format: `cli/hardware.example.toml`).
     #[arg(long)]
     pub hardware: Option<PathBuf>,
 }

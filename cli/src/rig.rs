@@ -31,7 +31,7 @@
 //! daq_sample_rate_hz = 24000
 //! loopback_volts_per_full_scale = 1.0   # V at the DAQ for a full-scale audio sample
 //! ```
-//! `crates/cli/hardware.example.toml` is this example as a file. Unknown keys are refused (a typo must not fall
+//! `cli/hardware.example.toml` is this example as a file. Unknown keys are refused (a typo must not fall
 //! back to a default), and every device is opened before the run starts, so an absent one is reported at once,
 //! by name.
 
