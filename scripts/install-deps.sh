@@ -7,8 +7,11 @@ set -euo pipefail
 # with pkg-config; everything else builds without system libraries (serialport and hidapi without libudev).
 debian_packages=(libasound2-dev pkg-config)
 
-# Python packages used by tests that cross-check our output with independent tools (pinned).
+# Python packages used by tests that cross-check our output with independent tools (pinned), installed into the
+# project's own virtual environment `.venv` (never the system interpreter: Debian refuses that). Tests find it as
+# `.venv/bin/python` at the workspace root, or wherever METAPLATE_PYTHON points.
 python_packages=(polars==2.1.0 pyarrow==26.0.1)
+venv_dir="$(cd "$(dirname "$0")/.." && pwd)/.venv"
 
 if [ ${#debian_packages[@]} -gt 0 ]; then
     missing=()
@@ -24,7 +27,18 @@ if [ ${#debian_packages[@]} -gt 0 ]; then
 fi
 
 if [ ${#python_packages[@]} -gt 0 ]; then
-    python3 -m pip install --quiet --disable-pip-version-check "${python_packages[@]}"
+    if [ ! -x "$venv_dir/bin/python" ]; then
+        if ! python3 -m venv "$venv_dir" 2>/dev/null; then
+            # Debian's own python3 keeps venv in a separate package.
+            rm -rf "$venv_dir"
+            sudo_cmd=""
+            [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+            $sudo_cmd apt-get update -qq
+            DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends python3-venv
+            python3 -m venv "$venv_dir"
+        fi
+    fi
+    "$venv_dir/bin/python" -m pip install --quiet --disable-pip-version-check "${python_packages[@]}"
 fi
 
 echo "install-deps: done"

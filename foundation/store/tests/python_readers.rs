@@ -1,6 +1,7 @@
 //! Polars and pyarrow read a dataset as it is, with no code of ours: `tests/python/read_dataset.py` checks row
-//! counts, column names and types, and a known impulse response. Needs python3 with polars and pyarrow, which
-//! `.ci/run` installs and then runs this test explicitly.
+//! counts, column names and types, and a known impulse response. Needs a Python with polars and pyarrow:
+//! `$METAPLATE_PYTHON`, else the project's `.venv/bin/python` that `scripts/install-deps.sh` makes (`.ci/run`
+//! installs it and then runs this test explicitly).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -12,7 +13,7 @@ use common::{meta, records};
 use metaplate_store::{Dataset, DatasetWriter, IfExists, compact};
 
 #[test]
-#[ignore = "needs python3 with polars and pyarrow: run by .ci/run"]
+#[ignore = "needs the project's .venv (scripts/install-deps.sh) with polars and pyarrow: run by .ci/run"]
 fn polars_and_pyarrow_read_the_committed_files() {
     let dir = tempfile::tempdir().unwrap();
     let mut writer = DatasetWriter::create(dir.path(), meta(), IfExists::Refuse).unwrap();
@@ -31,13 +32,23 @@ fn polars_and_pyarrow_read_the_committed_files() {
     std::fs::write(&expected_path, expected.to_string()).unwrap();
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/read_dataset.py");
     let run = |what: &str| {
-        let out = Command::new("python3").arg(script).arg(dir.path()).arg(&expected_path).output().unwrap();
+        let out = Command::new(python()).arg(script).arg(dir.path()).arg(&expected_path).output().unwrap();
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(out.status.success(), "{what}: {stdout}{}", String::from_utf8_lossy(&out.stderr));
     };
     run("after commits");
     compact(dir.path()).unwrap();
     run("after compaction");
+}
+
+/// The interpreter with the cross-check packages: `$METAPLATE_PYTHON`, else the workspace's `.venv`.
+fn python() -> std::path::PathBuf {
+    if let Some(p) = std::env::var_os("METAPLATE_PYTHON") {
+        return p.into();
+    }
+    let venv = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
+    assert!(venv.exists(), "no {} and no METAPLATE_PYTHON: run scripts/install-deps.sh", venv.display());
+    venv
 }
 
 /// `Dataset::lazy` scans exactly the committed files, in the dataset's columns.
