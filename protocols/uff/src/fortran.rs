@@ -1,0 +1,143 @@
+//! Fixed-column fields: writing numbers the way C's `%W.De` does (as pyuff writes them) and reading Fortran
+//! `I`, `E`, `D` and `A` fields back.
+
+use std::fmt::Write as _;
+
+/// Appends `value` as C's `%{width}.{decimals}e` would: mantissa with `decimals` digits after the point, `e`,
+/// sign, at least two exponent digits, right-justified in `width` columns. With `exponent_letter` `b'D'` the
+/// letter is `D` (Fortran double precision, as dataset 164 and 2411 write it).
+pub(crate) fn push_exp(out: &mut Vec<u8>, value: f64, width: usize, decimals: usize, exponent_letter: u8) {
+    let mut text = String::with_capacity(32);
+    // `{:.*e}` rounds the exact binary value to nearest, ties to even, as glibc's printf does.
+    let _ = write!(text, "{value:.decimals$e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((text.as_str(), "0"));
+    let exponent: i32 = exponent.parse().unwrap_or(0);
+    let mut field = String::with_capacity(width);
+    field.push_str(mantissa);
+    field.push(char::from(exponent_letter));
+    field.push(if exponent < 0 { '-' } else { '+' });
+    let _ = write!(field, "{:02}", exponent.unsigned_abs());
+    push_right(out, field.as_bytes(), width);
+}
+
+/// Appends `value` right-justified in `width` columns (`%{width}i`).
+pub(crate) fn push_int(out: &mut Vec<u8>, value: i64, width: usize) {
+    push_right(out, value.to_string().as_bytes(), width);
+}
+
+/// Appends `text` right-justified in `width` columns (`%{width}s`).
+pub(crate) fn push_right(out: &mut Vec<u8>, text: &[u8], width: usize) {
+    out.resize(out.len() + width.saturating_sub(text.len()), b' ');
+    out.extend_from_slice(text);
+}
+
+/// Appends `text` left-justified in `width` columns (`%-{width}s`).
+pub(crate) fn push_left(out: &mut Vec<u8>, text: &[u8], width: usize) {
+    out.extend_from_slice(text);
+    out.resize(out.len() + width.saturating_sub(text.len()), b' ');
+}
+
+/// The columns `start .. start + width` of `line` (0-based), shorter or empty where the line is shorter.
+pub(crate) fn columns(line: &[u8], start: usize, width: usize) -> &[u8] {
+    let end = start.saturating_add(width).min(line.len());
+    line.get(start.min(end)..end).unwrap_or(&[])
+}
+
+/// The field without leading and trailing blanks (spaces and tabs).
+pub(crate) fn trim(field: &[u8]) -> &[u8] {
+    let is_blank = |b: &u8| *b == b' ' || *b == b'\t';
+    let start = field.iter().position(|b| !is_blank(b)).unwrap_or(field.len());
+    let end = field.iter().rposition(|b| !is_blank(b)).map_or(start, |i| i + 1);
+    field.get(start..end).unwrap_or(&[])
+}
+
+/// An integer field (`I`): optional sign and digits between blanks. `None` if blank or anything else.
+pub(crate) fn parse_int(field: &[u8]) -> Option<i64> {
+    let text = std::str::from_utf8(trim(field)).ok()?;
+    if text.is_empty() || text.len() > 19 {
+        return None;
+    }
+    text.parse().ok()
+}
+
+/// A real field (`E`, `D`, `F`, `G`): `1.5E+03`, `0.15D+04`, Fortran's `0.15+004` without a letter (written when
+/// the exponent needs three digits), `1500.`. Infinities and NaN parse (as the words Rust knows), so that the
+/// caller reports them as non-finite values rather than as syntax. `None` if blank or not a number.
+pub(crate) fn parse_real(field: &[u8]) -> Option<f64> {
+    let field = trim(field);
+    if field.is_empty() || field.len() > 40 {
+        return None;
+    }
+    let mut text = [0u8; 41];
+    let mut len = 0;
+    let mut has_letter = false;
+    for (i, &b) in field.iter().enumerate() {
+        let b = match b {
+            b'D' | b'd' | b'E' | b'e' => {
+                has_letter = true;
+                b'e'
+            }
+            b'+' | b'-' if i > 0 && !has_letter && matches!(field[i - 1], b'0'..=b'9' | b'.') => {
+                // Fortran drops the letter when the exponent has three digits: `0.12345+100`.
+                text[len] = b'e';
+                len += 1;
+                has_letter = true;
+                b
+            }
+            b'0'..=b'9' | b'+' | b'-' | b'.' | b'a'..=b'z' | b'A'..=b'Z' => b,
+            _ => return None,
+        };
+        text[len] = b;
+        len += 1;
+    }
+    std::str::from_utf8(text.get(..len)?).ok()?.parse().ok()
+}
+
+/// A text field (`A`): trimmed, each byte outside printable ASCII replaced by `?` (so that a record decoded can
+/// always be written back column for column); blank becomes "NONE", the specification's word for unused.
+pub(crate) fn parse_text(field: &[u8]) -> String {
+    let field = trim(field);
+    if field.is_empty() {
+        return "NONE".to_owned();
+    }
+    field.iter().map(|&b| if (0x20..=0x7e).contains(&b) { char::from(b) } else { '?' }).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    fn exp(value: f64, width: usize, decimals: usize) -> String {
+        let mut out = Vec::new();
+        push_exp(&mut out, value, width, decimals, b'e');
+        String::from_utf8(out).unwrap()
+    }
+
+    #[test]
+    fn exponents_are_written_as_c_writes_them() {
+        assert_eq!(exp(1.0, 13, 5), "  1.00000e+00");
+        assert_eq!(exp(-2.0833333e-5, 13, 5), " -2.08333e-05");
+        assert_eq!(exp(-1.234567e-100, 13, 5), "-1.23457e-100");
+        assert_eq!(exp(0.0, 20, 11), "   0.00000000000e+00");
+        assert_eq!(exp(-0.0, 13, 5), " -0.00000e+00");
+        assert_eq!(exp(0.125, 8, 1), " 1.2e-01");
+        assert_eq!(exp(1e300, 20, 11), "  1.00000000000e+300");
+    }
+
+    #[test]
+    fn fortran_reals_parse() {
+        assert_eq!(parse_real(b"  0.15D+04"), Some(1500.0));
+        assert_eq!(parse_real(b"  0.15+004"), Some(1500.0));
+        assert_eq!(parse_real(b"0.15-002"), Some(0.0015));
+        assert_eq!(parse_real(b" -1.5e-3 "), Some(-0.0015));
+        assert_eq!(parse_real(b"1500."), Some(1500.0));
+        assert_eq!(parse_real(b"   "), None);
+        assert_eq!(parse_real(b"1.0e+0x"), None);
+        assert!(parse_real(b"NaN").unwrap().is_nan());
+        assert_eq!(parse_int(b"   -12"), Some(-12));
+        assert_eq!(parse_int(b" 1 2"), None);
+        assert_eq!(parse_text(b"  caf\xc3\xa9  "), "caf??");
+        assert_eq!(parse_text(b"    "), "NONE");
+    }
+}

@@ -1,0 +1,75 @@
+//! Universal files (UFF), sans-IO: the datasets a modal-analysis tool needs to place and read metaplate's
+//! responses, and to bring a lab's measurements in.
+//!
+//! A universal file is a sequence of datasets, each opened and closed by a line `    -1` (I6) and identified by
+//! its number on the line after the opening one. This crate reads and writes:
+//!
+//! - **58** (function at nodal DOF), ASCII, and **58b**, its binary variant: the 11 header records (ID lines 1 to
+//!   5; DOF identification, record 6; data form, record 7; abscissa, ordinate, denominator and z-axis data
+//!   characteristics, records 8 to 11), then the values. Supported: any function type (metaplate writes 1, time
+//!   response, and 4, frequency response function); real and complex ordinates; single and double precision;
+//!   **even abscissa only** (uneven spacing is reported as [`Malformed::Unsupported`]); 58b in either byte order
+//!   with IEEE 754 values (the identifier line `    58b     1     2          11        NNNN     0     0 ...`:
+//!   byte order 1 little or 2 big endian, floating-point format 2, 11 ASCII lines, `NNNN` bytes of data).
+//! - **164** (units): units code, description, temperature mode and the four factors to SI.
+//! - **2411** (nodes, double precision): label, coordinate systems, colour and x, y, z.
+//!
+//! Other datasets are stepped over ([`Record::Other`]), ASCII to their closing delimiter, binary by the byte count
+//! of their identifier line.
+//!
+//! # Layout and precision
+//!
+//! The [`Encoder`] writes what pyuff 2.5.8 writes, column for column (checked against its files in the tests),
+//! which follows the specification's Fortran formats with C's `%e` in place of Fortran's `E`:
+//!
+//! | values | format | significant digits | relative error of a round trip |
+//! |---|---|---|---|
+//! | 58 ASCII single (cases 1, 3) | `6E13.5`, written `%13.5e` | 6 | ≤ 5 × 10⁻⁶ |
+//! | 58 ASCII double (cases 5, 7) | `4E20.12`, written `%20.11e` | 12 | ≤ 5 × 10⁻¹² |
+//! | 58b single | `f32` | 24 bits | ≤ 2⁻²⁴ ≈ 6 × 10⁻⁸ |
+//! | 58b double | `f64` | 53 bits | exact |
+//! | record 7: abscissa start and step, z value | `3E13.5`, written `%13.5e` | 6 | ≤ 5 × 10⁻⁶ |
+//! | 164 factors | `3D25.17`, written `%25.16e` with `D` | 17 | exact |
+//! | 2411 coordinates | `1P3D25.16`, written `%25.16e` | 17 | exact |
+//!
+//! The abscissa step carries 6 significant digits in every variant (record 7 is text): a 48 kHz time step
+//! (20.8333… µs) is written `2.08333e-05` and reads back as 48000.08 Hz, so an importer rounds the sample rate
+//! it derives. Values in single precision must lie within `f32` range. NaN and infinities are refused by the
+//! encoder ([`EncodeError::Value`]) and reported by the decoder ([`Malformed::NonFinite`]): a decoded record holds
+//! only finite numbers.
+//!
+//! Text fields are printable ASCII (the encoder refuses anything else, which would shift the columns; the decoder
+//! shows other bytes as `?`), trimmed on reading, with "NONE" for blank (the specification's word for unused).
+//!
+//! # 58b byte counts
+//!
+//! The 58b description puts the binary data right after the line end of record 11 and the closing `    -1`
+//! right after the data, with no line end between. The encoder writes exactly that, with the true byte count
+//! (values × 4 or 8, a complex value counting two). The decoder reads the values record 7 announces and checks
+//! the identifier line's count against them ([`Malformed::ByteCount`]), with two known departures accepted: a line
+//! end between the data and the closing delimiter (written by some commercial software; pyuff's `fix_58b` is for
+//! these files), and a complex dataset stating half its bytes (pyuff 2.5.8 writes `num_pts × 8`).
+//!
+//! # Streaming
+//!
+//! The encoder appends one record to a caller's buffer ([`Encoder::encode_function`] takes a borrowed
+//! [`OrdinateRef`], so a response goes from a dataset's buffer to the file without a copy into a [`Function58`]);
+//! an exporter writes the buffer out and clears it after each record. The [`Decoder`] takes bytes split anywhere,
+//! holds at most one line beyond the last push plus the record being read, grows a record only with the values it
+//! has read, and bounds lines, values and nodes ([`Limits`]). Every [`DecodeError`] names the record (the dataset's
+//! ordinal in the file), the dataset number and the line, and what was expected there.
+
+mod decode;
+mod encode;
+mod error;
+mod fortran;
+mod model;
+
+pub use decode::{Decoder, Limits};
+pub use encode::{ByteOrder, Encoder, Format, Precision};
+pub use error::{DecodeError, EncodeError, Location, Malformed};
+pub use model::{
+    AxisCharacteristics, Dof, Function58, FunctionHeader, FunctionType, Node, Nodes2411, Ordinate, OrdinateRef,
+    OtherDataset, Record, Units164,
+};
+pub use num_complex::Complex64;
