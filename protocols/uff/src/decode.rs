@@ -97,6 +97,11 @@ enum State {
     SkipBytes {
         bytes: u64,
     },
+    /// ASCII lines, then binary bytes, to discard after an error in a 58b identifier line.
+    SkipCounted {
+        ascii_lines: u64,
+        bytes: u64,
+    },
     /// After an error inside a dataset: skipping to its closing delimiter.
     Skip,
 }
@@ -110,9 +115,10 @@ impl State {
             State::Nodes { .. } => "the records of dataset 2411",
             State::FunctionHeader { .. } => "the header records of dataset 58",
             State::AsciiValues { .. } => "more values of dataset 58",
-            State::BinaryValues { .. } | State::OtherBinary { .. } | State::SkipBytes { .. } => {
-                "the binary bytes the identifier line states"
-            }
+            State::BinaryValues { .. }
+            | State::OtherBinary { .. }
+            | State::SkipBytes { .. }
+            | State::SkipCounted { .. } => "the binary bytes the identifier line states",
             State::Closing { .. } | State::OtherAscii { .. } => "the delimiter `    -1` that closes the dataset",
         }
     }
@@ -330,6 +336,10 @@ impl Decoder {
                 };
                 if bytes == 0 { Step::Again } else { Step::Wait }
             }
+            State::SkipCounted { ascii_lines: 0, bytes } => {
+                self.state = State::SkipBytes { bytes };
+                Step::Again
+            }
             State::SkipBytes { bytes } => {
                 let bytes = self.discard(bytes);
                 self.state = if bytes == 0 { State::Skip } else { State::SkipBytes { bytes } };
@@ -345,7 +355,10 @@ impl Decoder {
                     Line::TooLong => {
                         // Overlong lines are an error only where this crate reads the fields.
                         match state {
-                            State::Skip | State::OtherAscii { .. } | State::OtherBinary { .. } => {
+                            State::Skip
+                            | State::OtherAscii { .. }
+                            | State::OtherBinary { .. }
+                            | State::SkipCounted { .. } => {
                                 self.state = state;
                                 return Step::Again;
                             }
@@ -413,12 +426,10 @@ impl Decoder {
             }
             State::Identifier => {
                 if is_delimiter {
-                    // An empty dataset: take this delimiter as the next one's opening.
+                    // The delimiter before was a closing one (of a dataset skipped as garbage) or opened an empty
+                    // dataset: this one opens the next.
                     self.state = State::Identifier;
-                    let expected = "the identifier line (dataset number)";
-                    let error = self.error(Malformed::Unexpected { expected, found: excerpt(&line) });
-                    self.record += 1;
-                    return Step::Emit(Err(error));
+                    return Step::Again;
                 }
                 self.step_identifier(line)
             }
@@ -446,6 +457,10 @@ impl Decoder {
                     self.state = State::OtherAscii { other };
                     Step::Again
                 }
+            }
+            State::SkipCounted { ascii_lines, bytes } => {
+                self.state = State::SkipCounted { ascii_lines: ascii_lines.saturating_sub(1), bytes };
+                Step::Again
             }
             State::OtherBinary { other, ascii_lines, bytes } => {
                 self.state = State::OtherBinary { other, ascii_lines: ascii_lines.saturating_sub(1), bytes };
@@ -528,7 +543,12 @@ impl Decoder {
         let binary_header = if binary {
             match self.binary_header(&line) {
                 Ok(header) => Some(header),
-                Err(kind) => return self.fail(kind),
+                Err((kind, Some((ascii_lines, bytes)))) => {
+                    // The counts are sound: step over the dataset by them, not by searching binary data.
+                    self.state = State::SkipCounted { ascii_lines, bytes };
+                    return Step::Emit(Err(self.error(kind)));
+                }
+                Err((kind, None)) => return self.fail(kind),
             }
         } else {
             None
@@ -549,21 +569,28 @@ impl Decoder {
 
     /// Format (I6,1A1,I6,I6,I12,I12,I6,I6,I12,I12): number, `b`, byte order, floating-point format, ASCII lines
     /// following, bytes following them, four unused fields.
-    fn binary_header(&self, line: &[u8]) -> Result<BinaryHeader, Malformed> {
-        let byte_order =
-            match self.int_field("byte ordering method", line, 7, 6, 1..=2, "1 (little) or 2 (big endian)")? {
-                1 => ByteOrder::LittleEndian,
-                _ => ByteOrder::BigEndian,
-            };
-        let float_format = self.int_field("floating-point format", line, 13, 6, 0..=99, "I6")?;
-        if float_format != 2 {
-            return Err(Malformed::Unsupported {
-                what: format!("floating-point format {float_format} (only 2, IEEE 754, is read)"),
-            });
+    /// On error: what, and the counts of ASCII lines and bytes to skip when they are sound.
+    fn binary_header(&self, line: &[u8]) -> Result<BinaryHeader, (Malformed, Option<(u64, u64)>)> {
+        let count = |field, start| {
+            self.int_field(field, line, start, 12, 0..=i64::MAX, "I12").map(|v| v as u64).map_err(|kind| (kind, None))
+        };
+        let ascii_lines = count("number of ASCII lines following", 19)?;
+        let bytes = count("number of bytes following the ASCII lines", 31)?;
+        let counts = Some((ascii_lines, bytes));
+        let byte_order = match self.int_field("byte ordering method", line, 7, 6, 1..=2, "1 (little) or 2 (big endian)")
+        {
+            Ok(1) => ByteOrder::LittleEndian,
+            Ok(_) => ByteOrder::BigEndian,
+            Err(kind) => return Err((kind, counts)),
+        };
+        match self.int_field("floating-point format", line, 13, 6, 0..=99, "I6") {
+            Ok(2) => Ok(BinaryHeader { byte_order, ascii_lines, bytes }),
+            Ok(other) => {
+                let what = format!("floating-point format {other} (only 2, IEEE 754, is read)");
+                Err((Malformed::Unsupported { what }, counts))
+            }
+            Err(kind) => Err((kind, counts)),
         }
-        let ascii_lines = self.int_field("number of ASCII lines following", line, 19, 12, 0..=i64::MAX, "I12")?;
-        let bytes = self.int_field("number of bytes following the ASCII lines", line, 31, 12, 0..=i64::MAX, "I12")?;
-        Ok(BinaryHeader { byte_order, ascii_lines: ascii_lines as u64, bytes: bytes as u64 })
     }
 
     fn step_units(
@@ -712,7 +739,8 @@ impl Decoder {
         // the values the header announces are what is read.
         let pyuff_complex = layout.complex && binary.bytes * 2 == expected;
         if binary.bytes != expected && !pyuff_complex {
-            self.state = State::SkipBytes { bytes: binary.bytes };
+            // One of the two counts is wrong: skip the smaller, then search for the closing delimiter.
+            self.state = State::SkipBytes { bytes: binary.bytes.min(expected) };
             return Step::Emit(Err(self.error(Malformed::ByteCount { stated: binary.bytes, expected })));
         }
         self.state = State::BinaryValues { header, layout, byte_order: binary.byte_order, reals: Vec::new() };

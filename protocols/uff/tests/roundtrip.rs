@@ -94,9 +94,12 @@ const FORMATS: [Format; 3] = [
     Format::Binary { byte_order: ByteOrder::BigEndian },
 ];
 
+/// A header, single- and double-precision values, a chunk size.
+type Case = (FunctionHeader, Vec<(f64, f64)>, Vec<(f64, f64)>, usize);
+
 /// A header, values for each precision (as complex pairs; the real case takes the real parts), and a chunk
 /// size to split the encoded bytes at.
-fn case() -> impl Strategy<Value = (FunctionHeader, Vec<(f64, f64)>, Vec<(f64, f64)>, usize)> {
+fn case() -> impl Strategy<Value = Case> {
     let pairs = |precision| prop::collection::vec((value(precision), value(precision)), 1..40);
     (header(), pairs(Precision::Single), pairs(Precision::Double), 1usize..200)
 }

@@ -1,6 +1,6 @@
 //! Records shared by the tests: metaplate's units, nodes and responses.
 
-#![allow(dead_code)]
+#![allow(dead_code, clippy::approx_constant)] // 3.14159265358979 is a value with 15 digits, not π
 
 use metaplate_uff::{
     Complex64, Decoder, Function58, FunctionHeader, FunctionType, Node, Nodes2411, Ordinate, Record, Units164,
