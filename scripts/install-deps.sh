@@ -10,7 +10,7 @@ debian_packages=(libasound2-dev pkg-config)
 # Python packages used by tests that cross-check our output with independent tools (pinned), installed into the
 # project's own virtual environment `.venv` (never the system interpreter: Debian refuses that). Tests find it as
 # `.venv/bin/python` at the workspace root, or wherever METAPLATE_PYTHON points.
-python_packages=(polars==2.1.0 pyarrow==26.0.1)
+python_packages=(polars==2.1.0 pyarrow==26.0.1 pyuff==2.5.8)
 venv_dir="$(cd "$(dirname "$0")/.." && pwd)/.venv"
 
 if [ ${#debian_packages[@]} -gt 0 ]; then
