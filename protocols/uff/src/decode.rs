@@ -761,7 +761,7 @@ impl Decoder {
         let dof = |start: usize, name: &'static str| -> Result<Dof, Malformed> {
             let node = self.u32_field(name, r6, start + 11, 10)?;
             let direction = self.int_field("direction", r6, start + 21, 4, -6..=6, "-6 to 6")?;
-            Ok(Dof { entity: parse_text(columns(r6, start, 11)), node, direction: direction as i8 })
+            Ok(Dof { entity: parse_text(columns(r6, start + 1, 10)), node, direction: direction as i8 })
         };
         let response = dof(30, "response node").map_err(at)?;
         let reference = dof(55, "reference node").map_err(at)?;
@@ -806,8 +806,8 @@ impl Decoder {
                 length_exponent: exponent(10, "length units exponent")?,
                 force_exponent: exponent(15, "force units exponent")?,
                 temperature_exponent: exponent(20, "temperature units exponent")?,
-                label: parse_text(columns(r, 25, 21)),
-                units_label: parse_text(columns(r, 46, 21)),
+                label: parse_text(columns(r, 26, 20)),
+                units_label: parse_text(columns(r, 47, 20)),
             })
         };
         let header = FunctionHeader {
