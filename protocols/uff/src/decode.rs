@@ -659,7 +659,11 @@ impl Decoder {
             }
             if nodes.len() as u64 >= self.limits.max_nodes {
                 let max = self.limits.max_nodes;
-                return self.fail(Malformed::TooLarge { what: "nodes in dataset 2411", count: max + 1, max });
+                return self.fail(Malformed::TooLarge {
+                    what: "nodes in dataset 2411",
+                    count: max.saturating_add(1),
+                    max,
+                });
             }
             // Record 1: Format(4I10).
             let mut fields = [0u32; 4];
@@ -726,7 +730,7 @@ impl Decoder {
             Precision::Single => 4,
             Precision::Double => 8,
         };
-        let expected = layout.reals * bytes_per_real;
+        let expected = layout.reals.saturating_mul(bytes_per_real);
         if binary.ascii_lines != 11 {
             let kind = Malformed::Unexpected {
                 expected: "11 ASCII lines before the binary data of dataset 58b",
@@ -913,7 +917,7 @@ impl Decoder {
         self.consume(take * size);
         if let Some(offset) = reals[start..].iter().position(|v| !v.is_finite()) {
             let index = start + offset;
-            let remaining = (layout.reals - reals.len() as u64) * size as u64;
+            let remaining = (layout.reals - reals.len() as u64).saturating_mul(size as u64);
             self.state = State::SkipBytes { bytes: remaining };
             return Step::Emit(Err(self.error(Malformed::NonFinite { index: index as u64, value: reals[index] })));
         }

@@ -58,6 +58,35 @@
 //! holds at most one line beyond the last push plus the record being read, grows a record only with the values it
 //! has read, and bounds lines, values and nodes ([`Limits`]). Every [`DecodeError`] names the record (the dataset's
 //! ordinal in the file), the dataset number and the line, and what was expected there.
+//!
+//! # Example
+//!
+//! An exporter appends each response to a buffer and writes it out; a reader pushes what it reads:
+//!
+//! ```
+//! use metaplate_uff::{
+//!     ByteOrder, Decoder, Encoder, Format, FunctionHeader, FunctionType, OrdinateRef, Precision, Record, Units164,
+//! };
+//!
+//! let encoder = Encoder::new(Format::Binary { byte_order: ByteOrder::LittleEndian }, Precision::Single);
+//! let mut file = Vec::new();
+//! encoder.encode(&Record::Units(Units164::si()), &mut file)?;
+//! // The impulse response of grid point 7 to actuator 1001, sampled at 48 kHz (m/s per N).
+//! let ir = [0.0, 1.5e-3, -2.25e-4];
+//! let header = FunctionHeader::velocity_over_force(FunctionType::TimeResponse, 7, 1001, 0.0, 1.0 / 48e3, "point 7");
+//! encoder.encode_function(&header, OrdinateRef::Real(&ir), &mut file)?;
+//!
+//! let mut decoder = Decoder::new();
+//! for piece in file.chunks(100) {
+//!     decoder.push(piece);
+//! }
+//! decoder.finish();
+//! let records: Vec<Record> = decoder.records().collect::<Result<_, _>>()?;
+//! let Record::Function(function) = &records[1] else { unreachable!() };
+//! assert_eq!(function.header.response.node, 7);
+//! assert_eq!(function.ordinate.len(), 3);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 mod decode;
 mod encode;
