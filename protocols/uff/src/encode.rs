@@ -77,8 +77,8 @@ impl Encoder {
     /// Appends `record` to `out`. On error nothing is appended.
     pub fn encode(&self, record: &Record, out: &mut Vec<u8>) -> Result<(), EncodeError> {
         match record {
-            Record::Units(units) => encode_units(units, out),
-            Record::Nodes(nodes) => encode_nodes(nodes, out),
+            Record::Units(units) => all_or_nothing(out, |out| write_units(units, out)),
+            Record::Nodes(nodes) => all_or_nothing(out, |out| write_nodes(nodes, out)),
             Record::Function(function) => self.encode_function(&function.header, function.ordinate.as_ref(), out),
             Record::Other(other) => Err(EncodeError::NotWritable { dataset_number: other.dataset_number }),
         }
@@ -93,12 +93,7 @@ impl Encoder {
         ordinate: OrdinateRef<'_>,
         out: &mut Vec<u8>,
     ) -> Result<(), EncodeError> {
-        let start = out.len();
-        let result = self.write_function(header, ordinate, out);
-        if result.is_err() {
-            out.truncate(start);
-        }
-        result
+        all_or_nothing(out, |out| self.write_function(header, ordinate, out))
     }
 
     fn write_function(
@@ -138,13 +133,10 @@ impl Encoder {
         };
         check_int("number of values", count as i64, 1, 9_999_999_999)?;
 
-        out.extend_from_slice(DELIMITER);
         match self.format {
-            Format::Ascii => {
-                push_int(out, 58, 6);
-                push_right(out, b"", 74);
-            }
+            Format::Ascii => push_opening(out, 58),
             Format::Binary { byte_order } => {
+                out.extend_from_slice(DELIMITER);
                 // Format (I6,1A1,I6,I6,I12,I12,I6,I6,I12,I12): 58, b, byte order, IEEE 754 (2), 11 ASCII lines,
                 // the bytes of binary data, four unused zeros.
                 let bytes = count.saturating_mul(reals_per_value).saturating_mul(value_bytes);
@@ -157,9 +149,9 @@ impl Encoder {
                 for width in [6, 6, 12, 12] {
                     push_int(out, 0, width);
                 }
+                out.push(b'\n');
             }
         }
-        out.push(b'\n');
         for line in &header.id_lines {
             push_text(out, "ID line", line, 80, Justify::Left)?;
             out.push(b'\n');
@@ -190,6 +182,27 @@ impl Encoder {
         out.extend_from_slice(DELIMITER);
         Ok(())
     }
+}
+
+/// The opening delimiter and the identifier line of an ASCII dataset, padded to 80 columns as pyuff pads it.
+fn push_opening(out: &mut Vec<u8>, dataset_number: i64) {
+    out.extend_from_slice(DELIMITER);
+    push_int(out, dataset_number, 6);
+    push_right(out, b"", 74);
+    out.push(b'\n');
+}
+
+/// Runs `write` on `out`, and removes what it appended if it fails.
+fn all_or_nothing(
+    out: &mut Vec<u8>,
+    write: impl FnOnce(&mut Vec<u8>) -> Result<(), EncodeError>,
+) -> Result<(), EncodeError> {
+    let start = out.len();
+    let result = write(out);
+    if result.is_err() {
+        out.truncate(start);
+    }
+    result
 }
 
 /// Every value finite, and within `f32` range for single precision.
@@ -325,20 +338,8 @@ fn push_axis(out: &mut Vec<u8>, axis: &AxisCharacteristics) -> Result<(), Encode
     Ok(())
 }
 
-fn encode_units(units: &Units164, out: &mut Vec<u8>) -> Result<(), EncodeError> {
-    let start = out.len();
-    let result = write_units(units, out);
-    if result.is_err() {
-        out.truncate(start);
-    }
-    result
-}
-
 fn write_units(units: &Units164, out: &mut Vec<u8>) -> Result<(), EncodeError> {
-    out.extend_from_slice(DELIMITER);
-    push_int(out, 164, 6);
-    push_right(out, b"", 74);
-    out.push(b'\n');
+    push_opening(out, 164);
     // Record 1: Format(I10,20A1,I10); pyuff right-justifies the description.
     push_checked_int(out, "units code", i64::from(units.units_code), 0, 9_999_999_999, 10)?;
     push_text(out, "units description", &units.description, 20, Justify::Right)?;
@@ -364,20 +365,8 @@ fn write_units(units: &Units164, out: &mut Vec<u8>) -> Result<(), EncodeError> {
     Ok(())
 }
 
-fn encode_nodes(nodes: &Nodes2411, out: &mut Vec<u8>) -> Result<(), EncodeError> {
-    let start = out.len();
-    let result = write_nodes(nodes, out);
-    if result.is_err() {
-        out.truncate(start);
-    }
-    result
-}
-
 fn write_nodes(nodes: &Nodes2411, out: &mut Vec<u8>) -> Result<(), EncodeError> {
-    out.extend_from_slice(DELIMITER);
-    push_int(out, 2411, 6);
-    push_right(out, b"", 74);
-    out.push(b'\n');
+    push_opening(out, 2411);
     for (n, node) in nodes.nodes.iter().enumerate() {
         // Record 1: Format(4I10); record 2: Format(1P3D25.16), as pyuff writes it (`%25.16e`).
         for value in [node.label, node.export_coordinate_system, node.displacement_coordinate_system, node.color] {
