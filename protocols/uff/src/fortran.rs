@@ -1,23 +1,34 @@
 //! Fixed-column fields: writing numbers the way C's `%W.De` does (as pyuff writes them) and reading Fortran
 //! `I`, `E`, `D` and `A` fields back.
 
-use std::fmt::Write as _;
+use std::io::Write as _;
 
 /// Appends `value` as C's `%{width}.{decimals}e` would: mantissa with `decimals` digits after the point, `e`,
 /// sign, at least two exponent digits, right-justified in `width` columns. With `exponent_letter` `b'D'` the
 /// letter is `D` (Fortran double precision, as dataset 164 and 2411 write it).
 pub(crate) fn push_exp(out: &mut Vec<u8>, value: f64, width: usize, decimals: usize, exponent_letter: u8) {
-    let mut text = String::with_capacity(32);
+    // Formatted on the stack: an exporter writes 10^8 values, and two heap strings each would dominate.
+    let mut text = [0u8; 64];
+    let mut cursor = std::io::Cursor::new(&mut text[..]);
     // `{:.*e}` rounds the exact binary value to nearest, ties to even, as glibc's printf does.
-    let _ = write!(text, "{value:.decimals$e}");
-    let (mantissa, exponent) = text.split_once('e').unwrap_or((text.as_str(), "0"));
-    let exponent: i32 = exponent.parse().unwrap_or(0);
-    let mut field = String::with_capacity(width);
-    field.push_str(mantissa);
-    field.push(char::from(exponent_letter));
-    field.push(if exponent < 0 { '-' } else { '+' });
-    let _ = write!(field, "{:02}", exponent.unsigned_abs());
-    push_right(out, field.as_bytes(), width);
+    let _ = write!(cursor, "{value:.decimals$e}");
+    let len = usize::try_from(cursor.position()).unwrap_or(0);
+    let text = text.get(..len).unwrap_or(&[]);
+    let split = text.iter().position(|&b| b == b'e').unwrap_or(text.len());
+    let (mantissa, exponent) = text.split_at(split);
+    let exponent = std::str::from_utf8(exponent.get(1..).unwrap_or(&[])).ok().and_then(|e| e.parse::<i32>().ok());
+    let exponent = exponent.unwrap_or(0);
+    let magnitude = exponent.unsigned_abs();
+    let digits = if magnitude >= 100 { 3 } else { 2 };
+    out.resize(out.len() + width.saturating_sub(mantissa.len() + 2 + digits), b' ');
+    out.extend_from_slice(mantissa);
+    out.push(exponent_letter);
+    out.push(if exponent < 0 { b'-' } else { b'+' });
+    if magnitude >= 100 {
+        out.push(b'0' + (magnitude / 100) as u8);
+    }
+    out.push(b'0' + (magnitude / 10 % 10) as u8);
+    out.push(b'0' + (magnitude % 10) as u8);
 }
 
 /// Appends `value` right-justified in `width` columns (`%{width}i`).
