@@ -147,6 +147,8 @@ fn a_line_end_between_binary_data_and_the_delimiter_is_accepted_and_crlf_too() {
     let ascii = file(Format::Ascii, Precision::Single, true);
     let crlf = String::from_utf8(ascii.clone()).unwrap().replace('\n', "\r\n");
     assert_eq!(decode(crlf.as_bytes()), decode(&ascii));
+    // No line end after the last delimiter.
+    assert_eq!(decode(&ascii[..ascii.len() - 1]), decode(&ascii));
 }
 
 fn nodes_len() -> usize {

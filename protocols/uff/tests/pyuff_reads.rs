@@ -1,6 +1,7 @@
 //! pyuff reads what this crate writes: every format combination in one file, checked value by value by
 //! `tests/python/read_uff.py`. Needs a Python with pyuff: `$METAPLATE_PYTHON`, else the project's
-//! `.venv/bin/python` that `scripts/install-deps.sh` makes.
+//! `.venv/bin/python` that `scripts/install-deps.sh` makes. Run:
+//! `cargo test -p metaplate-uff --test pyuff_reads -- --ignored`.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
