@@ -7,7 +7,7 @@ use crate::error::{DecodeError, Location, Malformed, excerpt};
 use crate::fortran::{columns, parse_int, parse_real, parse_text, trim};
 use crate::model::{
     AxisCharacteristics, Dof, Function58, FunctionHeader, FunctionType, Node, Nodes2411, Ordinate, OtherDataset,
-    Record, Units164,
+    UffRecord, Units164,
 };
 
 /// The decoder's bounds on hostile input.
@@ -82,7 +82,7 @@ enum State {
     /// Expecting the closing delimiter, then `record` is complete; a blank line first is allowed after binary
     /// data (a common departure from the 58b description).
     Closing {
-        record: Box<Record>,
+        record: Box<UffRecord>,
         blank_allowed: bool,
     },
     OtherAscii {
@@ -125,7 +125,7 @@ impl State {
 }
 
 enum Step {
-    Emit(Result<Record, DecodeError>),
+    Emit(Result<UffRecord, DecodeError>),
     Again,
     Wait,
 }
@@ -140,8 +140,8 @@ enum Line {
 /// [`poll`](Self::poll) until it returns `None`; call [`finish`](Self::finish) at the end of the input and poll once
 /// more.
 ///
-/// It yields datasets 164, 2411 and 58/58b as [`Record`]s and steps over datasets of other numbers
-/// ([`Record::Other`]). Each error names the record (the dataset's ordinal in the file), its dataset number and
+/// It yields datasets 164, 2411 and 58/58b as [`UffRecord`]s and steps over datasets of other numbers
+/// ([`UffRecord::Other`]). Each error names the record (the dataset's ordinal in the file), its dataset number and
 /// the line; after an error the decoder skips to the dataset's closing delimiter and goes on with the next
 /// dataset, so one bad dataset costs only itself. Results do not depend on how the input was split.
 ///
@@ -149,7 +149,7 @@ enum Line {
 /// record in progress grows only with the values actually read (never by what a header claims), up to
 /// [`Limits::max_values`] or [`Limits::max_nodes`].
 #[derive(Debug, Clone)]
-pub struct Decoder {
+pub struct UffDecoder {
     limits: Limits,
     buf: Vec<u8>,
     pos: usize,
@@ -165,13 +165,13 @@ pub struct Decoder {
     state: State,
 }
 
-impl Default for Decoder {
+impl Default for UffDecoder {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl Decoder {
+impl UffDecoder {
     /// A decoder at the start of a file, with the default [`Limits`].
     pub fn new() -> Self {
         Self::with_limits(Limits::default())
@@ -213,7 +213,7 @@ impl Decoder {
 
     /// The next record or error, or `None` when more input (or [`finish`](Self::finish)) is needed or the input
     /// is exhausted.
-    pub fn poll(&mut self) -> Option<Result<Record, DecodeError>> {
+    pub fn poll(&mut self) -> Option<Result<UffRecord, DecodeError>> {
         loop {
             match self.step() {
                 Step::Emit(result) => return Some(result),
@@ -233,7 +233,7 @@ impl Decoder {
     }
 
     /// Polls until `None`, as an iterator.
-    pub fn records(&mut self) -> impl Iterator<Item = Result<Record, DecodeError>> + '_ {
+    pub fn records(&mut self) -> impl Iterator<Item = Result<UffRecord, DecodeError>> + '_ {
         std::iter::from_fn(move || self.poll())
     }
 
@@ -330,7 +330,7 @@ impl Decoder {
             State::OtherBinary { other, ascii_lines: 0, bytes } => {
                 let bytes = self.discard(bytes);
                 self.state = if bytes == 0 {
-                    State::Closing { record: Box::new(Record::Other(other)), blank_allowed: true }
+                    State::Closing { record: Box::new(UffRecord::Other(other)), blank_allowed: true }
                 } else {
                     State::OtherBinary { other, ascii_lines: 0, bytes }
                 };
@@ -452,7 +452,7 @@ impl Decoder {
             State::OtherAscii { other } => {
                 if is_delimiter {
                     self.state = State::Between { garbage: false };
-                    Step::Emit(Ok(Record::Other(other)))
+                    Step::Emit(Ok(UffRecord::Other(other)))
                 } else {
                     self.state = State::OtherAscii { other };
                     Step::Again
@@ -601,7 +601,7 @@ impl Decoder {
         is_delimiter: bool,
     ) -> Step {
         let Some(record1) = record1 else {
-            // Record 1: Format(I10,20A1,I10).
+            // UffRecord 1: Format(I10,20A1,I10).
             let parsed = self.u32_field("units code", line, 0, 10).and_then(|code| {
                 let mode = self.u32_field("temperature mode", line, 30, 10)?;
                 Ok((code, parse_text(columns(line, 10, 20)), mode))
@@ -619,7 +619,7 @@ impl Decoder {
             let found = factors.len() as u64;
             return Step::Emit(Err(self.error(Malformed::TooFewValues { expected: 4, found })));
         }
-        // Record 2: Format(3D25.17), the fourth factor on the next line; read as words, as pyuff does.
+        // UffRecord 2: Format(3D25.17), the fourth factor on the next line; read as words, as pyuff does.
         for word in line.split(|&b| b == b' ' || b == b'\t').filter(|w| !w.is_empty()) {
             let Some(value) = parse_real(word) else {
                 let expected = "a unit factor (D25.17)";
@@ -644,7 +644,7 @@ impl Decoder {
                 temperature_per_k,
                 temperature_offset,
             };
-            self.state = State::Closing { record: Box::new(Record::Units(units)), blank_allowed: false };
+            self.state = State::Closing { record: Box::new(UffRecord::Units(units)), blank_allowed: false };
         } else {
             self.state = State::Units { record1: Some(record1), factors };
         }
@@ -655,7 +655,7 @@ impl Decoder {
         let Some([label, export, displacement, color]) = pending else {
             if is_delimiter {
                 self.state = State::Between { garbage: false };
-                return Step::Emit(Ok(Record::Nodes(Nodes2411 { nodes })));
+                return Step::Emit(Ok(UffRecord::Nodes(Nodes2411 { nodes })));
             }
             if nodes.len() as u64 >= self.limits.max_nodes {
                 let max = self.limits.max_nodes;
@@ -665,7 +665,7 @@ impl Decoder {
                     max,
                 });
             }
-            // Record 1: Format(4I10).
+            // UffRecord 1: Format(4I10).
             let mut fields = [0u32; 4];
             let names = ["node label", "export coordinate system", "displacement coordinate system", "color"];
             for (i, name) in names.into_iter().enumerate() {
@@ -677,7 +677,7 @@ impl Decoder {
             self.state = State::Nodes { nodes, pending: Some(fields) };
             return Step::Again;
         };
-        // Record 2: Format(1P3D25.16).
+        // UffRecord 2: Format(1P3D25.16).
         let mut position_m = [0.0; 3];
         for (axis, value_m) in position_m.iter_mut().enumerate() {
             let value = match parse_real(columns(line, 25 * axis, 25)) {
@@ -755,7 +755,7 @@ impl Decoder {
     fn function_header(&self, lines: &[Vec<u8>]) -> Result<(FunctionHeader, Layout), (usize, Malformed)> {
         let line = |i: usize| lines.get(i).map_or(&[][..], |l| l.as_slice());
         let id_lines = [0, 1, 2, 3, 4].map(|i| parse_text(columns(line(i), 0, 80)));
-        // Record 6: Format(2(I5,I10),2(1X,10A1,I10,I4)).
+        // UffRecord 6: Format(2(I5,I10),2(1X,10A1,I10,I4)).
         let r6 = line(5);
         let at = |kind| (5, kind);
         let function_type = self.int_field("function type", r6, 0, 5, 0..=99_999, "I5").map_err(at)?;
@@ -769,7 +769,7 @@ impl Decoder {
         };
         let response = dof(30, "response node").map_err(at)?;
         let reference = dof(55, "reference node").map_err(at)?;
-        // Record 7: Format(3I10,3E13.5).
+        // UffRecord 7: Format(3I10,3E13.5).
         let r7 = line(6);
         let at = |kind| (6, kind);
         let data_type = self.int_field("ordinate data type", r7, 0, 10, 2..=6, "2, 4, 5 or 6").map_err(at)?;
@@ -931,11 +931,11 @@ impl Decoder {
     }
 }
 
-fn function(header: FunctionHeader, layout: Layout, reals: Vec<f64>) -> Record {
+fn function(header: FunctionHeader, layout: Layout, reals: Vec<f64>) -> UffRecord {
     let ordinate = if layout.complex {
         Ordinate::Complex(reals.chunks_exact(2).map(|pair| Complex64::new(pair[0], pair[1])).collect())
     } else {
         Ordinate::Real(reals)
     };
-    Record::Function(Box::new(Function58 { header, ordinate }))
+    UffRecord::Function(Box::new(Function58 { header, ordinate }))
 }

@@ -2,7 +2,7 @@
 
 use crate::error::EncodeError;
 use crate::fortran::{push_exp, push_int, push_left, push_right};
-use crate::model::{AxisCharacteristics, Dof, FunctionHeader, Nodes2411, OrdinateRef, Record, Units164};
+use crate::model::{AxisCharacteristics, Dof, FunctionHeader, Nodes2411, OrdinateRef, UffRecord, Units164};
 
 /// Byte order of 58b binary data (field 3 of the 58b identifier line).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -59,7 +59,7 @@ impl Precision {
 ///
 /// `format` and `precision` apply to dataset 58; datasets 164 and 2411 are ASCII and double precision always.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Encoder {
+pub struct UffEncoder {
     /// ASCII 58 or binary 58b.
     pub format: Format,
     /// Single or double precision.
@@ -68,19 +68,19 @@ pub struct Encoder {
 
 const DELIMITER: &[u8] = b"    -1\n";
 
-impl Encoder {
+impl UffEncoder {
     /// An encoder writing dataset 58 in `format` and `precision`.
     pub fn new(format: Format, precision: Precision) -> Self {
         Self { format, precision }
     }
 
     /// Appends `record` to `out`. On error nothing is appended.
-    pub fn encode(&self, record: &Record, out: &mut Vec<u8>) -> Result<(), EncodeError> {
+    pub fn encode(&self, record: &UffRecord, out: &mut Vec<u8>) -> Result<(), EncodeError> {
         match record {
-            Record::Units(units) => all_or_nothing(out, |out| write_units(units, out)),
-            Record::Nodes(nodes) => all_or_nothing(out, |out| write_nodes(nodes, out)),
-            Record::Function(function) => self.encode_function(&function.header, function.ordinate.as_ref(), out),
-            Record::Other(other) => Err(EncodeError::NotWritable { dataset_number: other.dataset_number }),
+            UffRecord::Units(units) => all_or_nothing(out, |out| write_units(units, out)),
+            UffRecord::Nodes(nodes) => all_or_nothing(out, |out| write_nodes(nodes, out)),
+            UffRecord::Function(function) => self.encode_function(&function.header, function.ordinate.as_ref(), out),
+            UffRecord::Other(other) => Err(EncodeError::NotWritable { dataset_number: other.dataset_number }),
         }
     }
 
@@ -156,7 +156,7 @@ impl Encoder {
             push_text(out, "ID line", line, 80, Justify::Left)?;
             out.push(b'\n');
         }
-        // Record 6: Format(2(I5,I10),2(1X,10A1,I10,I4)).
+        // UffRecord 6: Format(2(I5,I10),2(1X,10A1,I10,I4)).
         push_checked_int(out, "function type", i64::from(header.function_type.code()), 0, 99_999, 5)?;
         push_checked_int(out, "function identification number", i64::from(header.function_id), 0, 9_999_999_999, 10)?;
         push_checked_int(out, "version number", i64::from(header.version), 0, 99_999, 5)?;
@@ -164,7 +164,7 @@ impl Encoder {
         push_dof(out, "response", &header.response)?;
         push_dof(out, "reference", &header.reference)?;
         out.push(b'\n');
-        // Record 7: Format(3I10,3E13.5): data type, values, even spacing (1), start, step, z-axis value.
+        // UffRecord 7: Format(3I10,3E13.5): data type, values, even spacing (1), start, step, z-axis value.
         push_int(out, data_type, 10);
         push_int(out, count as i64, 10);
         push_int(out, 1, 10);
@@ -340,12 +340,12 @@ fn push_axis(out: &mut Vec<u8>, axis: &AxisCharacteristics) -> Result<(), Encode
 
 fn write_units(units: &Units164, out: &mut Vec<u8>) -> Result<(), EncodeError> {
     push_opening(out, 164);
-    // Record 1: Format(I10,20A1,I10); pyuff right-justifies the description.
+    // UffRecord 1: Format(I10,20A1,I10); pyuff right-justifies the description.
     push_checked_int(out, "units code", i64::from(units.units_code), 0, 9_999_999_999, 10)?;
     push_text(out, "units description", &units.description, 20, Justify::Right)?;
     push_checked_int(out, "temperature mode", i64::from(units.temperature_mode), 0, 9_999_999_999, 10)?;
     out.push(b'\n');
-    // Record 2: Format(3D25.17), then the temperature offset on its own line (as pyuff and I-DEAS write it).
+    // UffRecord 2: Format(3D25.17), then the temperature offset on its own line (as pyuff and I-DEAS write it).
     let factors = [
         ("length factor", units.length_per_m),
         ("force factor", units.force_per_n),
@@ -368,7 +368,7 @@ fn write_units(units: &Units164, out: &mut Vec<u8>) -> Result<(), EncodeError> {
 fn write_nodes(nodes: &Nodes2411, out: &mut Vec<u8>) -> Result<(), EncodeError> {
     push_opening(out, 2411);
     for (n, node) in nodes.nodes.iter().enumerate() {
-        // Record 1: Format(4I10); record 2: Format(1P3D25.16), as pyuff writes it (`%25.16e`).
+        // UffRecord 1: Format(4I10); record 2: Format(1P3D25.16), as pyuff writes it (`%25.16e`).
         for value in [node.label, node.export_coordinate_system, node.displacement_coordinate_system, node.color] {
             push_checked_int(out, "node field", i64::from(value), 0, 9_999_999_999, 10)?;
         }

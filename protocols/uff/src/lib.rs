@@ -14,12 +14,12 @@
 //! - **164** (units): units code, description, temperature mode and the four factors to SI.
 //! - **2411** (nodes, double precision): label, coordinate systems, colour and x, y, z.
 //!
-//! Other datasets are stepped over ([`Record::Other`]), ASCII to their closing delimiter, binary by the byte count
+//! Other datasets are stepped over ([`UffRecord::Other`]), ASCII to their closing delimiter, binary by the byte count
 //! of their identifier line.
 //!
 //! # Layout and precision
 //!
-//! The [`Encoder`] writes what pyuff 2.5.8 writes, column for column (checked against its files in the tests),
+//! The [`UffEncoder`] writes what pyuff 2.5.8 writes, column for column (checked against its files in the tests),
 //! which follows the specification's Fortran formats with C's `%e` in place of Fortran's `E`:
 //!
 //! | values | format | significant digits | relative error of a round trip |
@@ -52,9 +52,9 @@
 //!
 //! # Streaming
 //!
-//! The encoder appends one record to a caller's buffer ([`Encoder::encode_function`] takes a borrowed
+//! The encoder appends one record to a caller's buffer ([`UffEncoder::encode_function`] takes a borrowed
 //! [`OrdinateRef`], so a response goes from a dataset's buffer to the file without a copy into a [`Function58`]);
-//! an exporter writes the buffer out and clears it after each record. The [`Decoder`] takes bytes split anywhere,
+//! an exporter writes the buffer out and clears it after each record. The [`UffDecoder`] takes bytes split anywhere,
 //! holds at most one line beyond the last push plus the record being read, grows a record only with the values it
 //! has read, and bounds lines, values and nodes ([`Limits`]). Every [`DecodeError`] names the record (the dataset's
 //! ordinal in the file), the dataset number and the line, and what was expected there.
@@ -65,24 +65,24 @@
 //!
 //! ```
 //! use metaplate_uff::{
-//!     ByteOrder, Decoder, Encoder, Format, FunctionHeader, FunctionType, OrdinateRef, Precision, Record, Units164,
+//!     ByteOrder, UffDecoder, UffEncoder, Format, FunctionHeader, FunctionType, OrdinateRef, Precision, UffRecord, Units164,
 //! };
 //!
-//! let encoder = Encoder::new(Format::Binary { byte_order: ByteOrder::LittleEndian }, Precision::Single);
+//! let encoder = UffEncoder::new(Format::Binary { byte_order: ByteOrder::LittleEndian }, Precision::Single);
 //! let mut file = Vec::new();
-//! encoder.encode(&Record::Units(Units164::si()), &mut file)?;
+//! encoder.encode(&UffRecord::Units(Units164::si()), &mut file)?;
 //! // The impulse response of grid point 7 to actuator 1001, sampled at 48 kHz (m/s per N).
 //! let ir = [0.0, 1.5e-3, -2.25e-4];
 //! let header = FunctionHeader::velocity_over_force(FunctionType::TimeResponse, 7, 1001, 0.0, 1.0 / 48e3, "point 7");
 //! encoder.encode_function(&header, OrdinateRef::Real(&ir), &mut file)?;
 //!
-//! let mut decoder = Decoder::new();
+//! let mut decoder = UffDecoder::new();
 //! for piece in file.chunks(100) {
 //!     decoder.push(piece);
 //! }
 //! decoder.finish();
-//! let records: Vec<Record> = decoder.records().collect::<Result<_, _>>()?;
-//! let Record::Function(function) = &records[1] else { unreachable!() };
+//! let records: Vec<UffRecord> = decoder.records().collect::<Result<_, _>>()?;
+//! let UffRecord::Function(function) = &records[1] else { unreachable!() };
 //! assert_eq!(function.header.response.node, 7);
 //! assert_eq!(function.ordinate.len(), 3);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -94,11 +94,11 @@ mod error;
 mod fortran;
 mod model;
 
-pub use decode::{Decoder, Limits};
-pub use encode::{ByteOrder, Encoder, Format, Precision};
+pub use decode::{Limits, UffDecoder};
+pub use encode::{ByteOrder, Format, Precision, UffEncoder};
 pub use error::{DecodeError, EncodeError, Location, Malformed};
 pub use model::{
     AxisCharacteristics, Dof, Function58, FunctionHeader, FunctionType, Node, Nodes2411, Ordinate, OrdinateRef,
-    OtherDataset, Record, Units164,
+    OtherDataset, UffRecord, Units164,
 };
 pub use num_complex::Complex64;

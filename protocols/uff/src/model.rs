@@ -4,7 +4,7 @@ use num_complex::Complex64;
 
 /// One dataset of a universal file.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Record {
+pub enum UffRecord {
     /// Dataset 164: the file's units.
     Units(Units164),
     /// Dataset 2411: nodes with double-precision coordinates.

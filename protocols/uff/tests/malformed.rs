@@ -7,8 +7,8 @@ mod common;
 
 use common::{complex_values, decode, decode_in_chunks, function, nodes, real_values, units};
 use metaplate_uff::{
-    ByteOrder, Complex64, DecodeError, Decoder, EncodeError, Encoder, Format, FunctionType, Limits, Location,
-    Malformed, Ordinate, OrdinateRef, Precision, Record,
+    ByteOrder, Complex64, DecodeError, EncodeError, Format, FunctionType, Limits, Location, Malformed, Ordinate,
+    OrdinateRef, Precision, UffDecoder, UffEncoder, UffRecord,
 };
 use proptest::prelude::*;
 
@@ -17,16 +17,19 @@ const LE: Format = Format::Binary { byte_order: ByteOrder::LittleEndian };
 /// Units, nodes, then a function in `format` and `precision` (`complex`: a frequency response), then nodes again
 /// (so that recovery after a bad function shows).
 fn file(format: Format, precision: Precision, complex: bool) -> Vec<u8> {
-    let encoder = Encoder::new(format, precision);
+    let encoder = UffEncoder::new(format, precision);
     let function = if complex {
         function(FunctionType::FrequencyResponse, Ordinate::Complex(complex_values()))
     } else {
         function(FunctionType::TimeResponse, Ordinate::Real(real_values()))
     };
     let mut out = Vec::new();
-    for record in
-        [Record::Units(units()), Record::Nodes(nodes()), Record::Function(Box::new(function)), Record::Nodes(nodes())]
-    {
+    for record in [
+        UffRecord::Units(units()),
+        UffRecord::Nodes(nodes()),
+        UffRecord::Function(Box::new(function)),
+        UffRecord::Nodes(nodes()),
+    ] {
         encoder.encode(&record, &mut out).unwrap();
     }
     out
@@ -38,7 +41,7 @@ fn replace(bytes: &[u8], from: &str, to: &str) -> Vec<u8> {
 }
 
 /// The one error among the results, after checking that the same results come whatever the split.
-fn the_error(bytes: &[u8]) -> (DecodeError, Vec<Result<Record, DecodeError>>) {
+fn the_error(bytes: &[u8]) -> (DecodeError, Vec<Result<UffRecord, DecodeError>>) {
     let whole = decode(bytes);
     for chunk in [1, 3, 64] {
         // Compared as text: NaN is not equal to itself.
@@ -55,9 +58,9 @@ fn at(record: u64, dataset_number: u32, line: u64) -> Location {
 }
 
 /// The good records around the bad function: units, nodes, and the nodes after it.
-fn assert_recovered(results: &[Result<Record, DecodeError>]) {
-    let good: Vec<&Record> = results.iter().filter_map(|r| r.as_ref().ok()).collect();
-    assert_eq!(good, [&Record::Units(units()), &Record::Nodes(nodes()), &Record::Nodes(nodes())]);
+fn assert_recovered(results: &[Result<UffRecord, DecodeError>]) {
+    let good: Vec<&UffRecord> = results.iter().filter_map(|r| r.as_ref().ok()).collect();
+    assert_eq!(good, [&UffRecord::Units(units()), &UffRecord::Nodes(nodes()), &UffRecord::Nodes(nodes())]);
 }
 
 // Line numbers in `file`: units 1-6, nodes 7-15, the function's delimiter 16, identifier 17, records 1-11 on
@@ -153,7 +156,7 @@ fn a_line_end_between_binary_data_and_the_delimiter_is_accepted_and_crlf_too() {
 
 fn nodes_len() -> usize {
     let mut out = Vec::new();
-    Encoder::new(Format::Ascii, Precision::Double).encode(&Record::Nodes(nodes()), &mut out).unwrap();
+    UffEncoder::new(Format::Ascii, Precision::Double).encode(&UffRecord::Nodes(nodes()), &mut out).unwrap();
     out.len()
 }
 
@@ -241,7 +244,7 @@ fn other_datasets_are_stepped_over() {
     let others: Vec<(u32, bool, u64)> = results
         .iter()
         .filter_map(|r| match r {
-            Ok(Record::Other(other)) => Some((other.dataset_number, other.binary, other.line)),
+            Ok(UffRecord::Other(other)) => Some((other.dataset_number, other.binary, other.line)),
             _ => None,
         })
         .collect();
@@ -252,7 +255,7 @@ fn other_datasets_are_stepped_over() {
 #[test]
 fn the_decoder_holds_one_line_beyond_the_last_push() {
     let limits = Limits { max_line_bytes: 100, ..Limits::default() };
-    let mut decoder = Decoder::with_limits(limits);
+    let mut decoder = UffDecoder::with_limits(limits);
     for _ in 0..1000 {
         decoder.push(&[b'x'; 37]);
         while decoder.poll().is_some() {}
@@ -262,7 +265,7 @@ fn the_decoder_holds_one_line_beyond_the_last_push() {
 
 #[test]
 fn the_encoder_refuses_what_it_cannot_write_and_appends_nothing() {
-    let encoder = Encoder::new(Format::Ascii, Precision::Single);
+    let encoder = UffEncoder::new(Format::Ascii, Precision::Single);
     let mut out = b"kept".to_vec();
     let base = function(FunctionType::TimeResponse, Ordinate::Real(vec![1.0, 2.0]));
     let refuse = |values: OrdinateRef<'_>, header: &metaplate_uff::FunctionHeader, out: &mut Vec<u8>| {
@@ -288,7 +291,7 @@ fn the_encoder_refuses_what_it_cannot_write_and_appends_nothing() {
     assert!(matches!(refuse(OrdinateRef::Real(&[1.0]), &header, &mut out), EncodeError::Integer { .. }));
     assert_eq!(out, b"kept");
     // Double precision takes what single cannot.
-    Encoder::new(Format::Ascii, Precision::Double).encode_function(h, OrdinateRef::Real(&[1e39]), &mut out).unwrap();
+    UffEncoder::new(Format::Ascii, Precision::Double).encode_function(h, OrdinateRef::Real(&[1e39]), &mut out).unwrap();
 }
 
 proptest! {

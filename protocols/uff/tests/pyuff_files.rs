@@ -6,7 +6,7 @@
 mod common;
 
 use common::{complex_values, decode, decode_in_chunks, function, nodes, real_values, units};
-use metaplate_uff::{ByteOrder, Encoder, Format, FunctionType, Ordinate, Precision, Record};
+use metaplate_uff::{ByteOrder, Format, FunctionType, Ordinate, Precision, UffEncoder, UffRecord};
 
 fn fixture(name: &str) -> Vec<u8> {
     std::fs::read(format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
@@ -14,11 +14,11 @@ fn fixture(name: &str) -> Vec<u8> {
 
 /// The fixture `name`, encoded here: units, nodes, then the function in `format` and `precision`.
 fn encoded(format: Format, precision: Precision, function_type: FunctionType, ordinate: Ordinate) -> Vec<u8> {
-    let encoder = Encoder::new(format, precision);
+    let encoder = UffEncoder::new(format, precision);
     let mut out = Vec::new();
-    encoder.encode(&Record::Units(units()), &mut out).unwrap();
-    encoder.encode(&Record::Nodes(nodes()), &mut out).unwrap();
-    encoder.encode(&Record::Function(Box::new(function(function_type, ordinate))), &mut out).unwrap();
+    encoder.encode(&UffRecord::Units(units()), &mut out).unwrap();
+    encoder.encode(&UffRecord::Nodes(nodes()), &mut out).unwrap();
+    encoder.encode(&UffRecord::Function(Box::new(function(function_type, ordinate))), &mut out).unwrap();
     out
 }
 
@@ -75,7 +75,7 @@ fn a_complex_binary_file_differs_from_pyuffs_only_in_the_byte_count() {
     );
     assert_eq!(ours_fixed.as_bytes(), String::from_utf8_lossy(&theirs).as_bytes());
     let records = decode(&theirs);
-    let Ok(Record::Function(read)) = &records[2] else { panic!("{records:?}") };
+    let Ok(UffRecord::Function(read)) = &records[2] else { panic!("{records:?}") };
     assert_eq!(read.ordinate, Ordinate::Complex(complex_values()));
 }
 
@@ -120,14 +120,14 @@ fn pyuffs_files_decode_to_the_records_they_hold() {
     for (name, function_type, ordinate) in cases {
         let bytes = fixture(name);
         for chunk in [1, 7, 80, bytes.len()] {
-            let records: Vec<Record> = decode_in_chunks(&bytes, chunk).into_iter().map(|r| r.unwrap()).collect();
+            let records: Vec<UffRecord> = decode_in_chunks(&bytes, chunk).into_iter().map(|r| r.unwrap()).collect();
             assert_eq!(records.len(), 3, "{name}");
-            assert_eq!(records[0], Record::Units(units()), "{name}");
-            assert_eq!(records[1], Record::Nodes(nodes()), "{name}");
+            assert_eq!(records[0], UffRecord::Units(units()), "{name}");
+            assert_eq!(records[1], UffRecord::Nodes(nodes()), "{name}");
             let mut expected = function(function_type, ordinate.clone());
-            // Record 7 keeps 6 significant digits of the step.
+            // UffRecord 7 keeps 6 significant digits of the step.
             expected.header.abscissa_step = single(expected.header.abscissa_step);
-            assert_eq!(records[2], Record::Function(Box::new(expected)), "{name}, chunks of {chunk}");
+            assert_eq!(records[2], UffRecord::Function(Box::new(expected)), "{name}, chunks of {chunk}");
         }
     }
 }

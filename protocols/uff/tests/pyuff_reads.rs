@@ -12,7 +12,7 @@ use std::process::Command;
 
 use common::{nodes, units};
 use metaplate_uff::{
-    ByteOrder, Complex64, Encoder, Format, Function58, FunctionHeader, FunctionType, Ordinate, Precision, Record,
+    ByteOrder, Complex64, Format, Function58, FunctionHeader, FunctionType, Ordinate, Precision, UffEncoder, UffRecord,
 };
 
 /// Deterministic values of every sign and a range of magnitudes within single precision.
@@ -33,9 +33,9 @@ fn values(n: usize, seed: u64) -> Vec<f64> {
 fn pyuff_reads_every_variant_we_write() {
     let dir = tempfile::tempdir().unwrap();
     let mut file = Vec::new();
-    let plain = Encoder::new(Format::Ascii, Precision::Double);
-    plain.encode(&Record::Units(units()), &mut file).unwrap();
-    plain.encode(&Record::Nodes(nodes()), &mut file).unwrap();
+    let plain = UffEncoder::new(Format::Ascii, Precision::Double);
+    plain.encode(&UffRecord::Units(units()), &mut file).unwrap();
+    plain.encode(&UffRecord::Nodes(nodes()), &mut file).unwrap();
     let mut functions = Vec::new();
     let formats = [
         (Format::Ascii, "ascii"),
@@ -60,7 +60,9 @@ fn pyuff_reads_every_variant_we_write() {
                     let step = if function_type == FunctionType::TimeResponse { 1.0 / 48000.0 } else { 0.5 };
                     let header = FunctionHeader::velocity_over_force(function_type, 2, 1001, 0.0, step, "pyuff check");
                     let function = Function58 { header, ordinate };
-                    Encoder::new(format, precision).encode(&Record::Function(Box::new(function)), &mut file).unwrap();
+                    UffEncoder::new(format, precision)
+                        .encode(&UffRecord::Function(Box::new(function)), &mut file)
+                        .unwrap();
                     let mut json = String::new();
                     write!(
                         json,

@@ -15,8 +15,8 @@ mod common;
 
 use common::decode_in_chunks;
 use metaplate_uff::{
-    AxisCharacteristics, ByteOrder, Complex64, Dof, Encoder, Format, Function58, FunctionHeader, FunctionType, Node,
-    Nodes2411, Ordinate, Precision, Record, Units164,
+    AxisCharacteristics, ByteOrder, Complex64, Dof, Format, Function58, FunctionHeader, FunctionType, Node, Nodes2411,
+    Ordinate, Precision, UffEncoder, UffRecord, Units164,
 };
 use proptest::prelude::*;
 
@@ -125,10 +125,10 @@ fn reals(ordinate: &Ordinate) -> Vec<f64> {
 
 fn round_trip(written: &Function58, format: Format, precision: Precision, chunk: usize) -> Result<(), TestCaseError> {
     let mut bytes = Vec::new();
-    Encoder::new(format, precision).encode(&Record::Function(Box::new(written.clone())), &mut bytes).unwrap();
+    UffEncoder::new(format, precision).encode(&UffRecord::Function(Box::new(written.clone())), &mut bytes).unwrap();
     let mut records = decode_in_chunks(&bytes, chunk);
     prop_assert_eq!(records.len(), 1);
-    let Ok(Record::Function(read)) = records.remove(0) else { panic!("{records:?}") };
+    let Ok(UffRecord::Function(read)) = records.remove(0) else { panic!("{records:?}") };
     let (w, r) = (&written.header, &read.header);
     prop_assert!(six_digits(w.abscissa_start, r.abscissa_start), "{} {}", w.abscissa_start, r.abscissa_start);
     prop_assert!(six_digits(w.abscissa_step, r.abscissa_step), "{} {}", w.abscissa_step, r.abscissa_step);
@@ -199,13 +199,13 @@ proptest! {
                 .map(|(label, position_m)| Node { label, export_coordinate_system: 1, displacement_coordinate_system: 2, color: 11, position_m })
                 .collect(),
         };
-        let written = vec![Record::Units(units), Record::Nodes(nodes)];
+        let written = vec![UffRecord::Units(units), UffRecord::Nodes(nodes)];
         let mut bytes = Vec::new();
-        let encoder = Encoder::new(Format::Ascii, Precision::Double);
+        let encoder = UffEncoder::new(Format::Ascii, Precision::Double);
         for record in &written {
             encoder.encode(record, &mut bytes).unwrap();
         }
-        let read: Vec<Record> = decode_in_chunks(&bytes, chunk).into_iter().map(|r| r.unwrap()).collect();
+        let read: Vec<UffRecord> = decode_in_chunks(&bytes, chunk).into_iter().map(|r| r.unwrap()).collect();
         prop_assert_eq!(read, written);
     }
 }

@@ -3,7 +3,7 @@
 #![allow(dead_code, clippy::approx_constant)] // 3.14159265358979 is a value with 15 digits, not π
 
 use metaplate_uff::{
-    Complex64, Decoder, Function58, FunctionHeader, FunctionType, Node, Nodes2411, Ordinate, Record, Units164,
+    Complex64, Function58, FunctionHeader, FunctionType, Node, Nodes2411, Ordinate, UffDecoder, UffRecord, Units164,
 };
 
 /// Two grid points and an actuator, in metres (the fixtures' nodes).
@@ -40,8 +40,8 @@ pub fn complex_values() -> Vec<Complex64> {
 }
 
 /// Decodes `bytes` pushed in pieces of `chunk` bytes; every result in order.
-pub fn decode_in_chunks(bytes: &[u8], chunk: usize) -> Vec<Result<Record, metaplate_uff::DecodeError>> {
-    let mut decoder = Decoder::new();
+pub fn decode_in_chunks(bytes: &[u8], chunk: usize) -> Vec<Result<UffRecord, metaplate_uff::DecodeError>> {
+    let mut decoder = UffDecoder::new();
     let mut out = Vec::new();
     for piece in bytes.chunks(chunk.max(1)) {
         decoder.push(piece);
@@ -53,7 +53,7 @@ pub fn decode_in_chunks(bytes: &[u8], chunk: usize) -> Vec<Result<Record, metapl
 }
 
 /// Decodes `bytes` whole.
-pub fn decode(bytes: &[u8]) -> Vec<Result<Record, metaplate_uff::DecodeError>> {
+pub fn decode(bytes: &[u8]) -> Vec<Result<UffRecord, metaplate_uff::DecodeError>> {
     decode_in_chunks(bytes, bytes.len())
 }
 
