@@ -38,14 +38,8 @@ impl fmt::Display for RigError {
     }
 }
 
-impl std::error::Error for RigError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            RigError::Hardware(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+// No `source`: the message of `Hardware` is its inner error's, which anyhow would print twice.
+impl std::error::Error for RigError {}
 
 /// The plate a run measures: its geometry (grid, mask, actuator positions) and its identity in the dataset.
 #[derive(Debug, Clone)]

@@ -73,12 +73,27 @@ pub struct Backend {
     pub feature: &'static str,
     /// Whether this build has it.
     pub available: bool,
-    /// Why not, when it is not available (and how to get it).
-    pub missing_reason: &'static str,
+    /// Whether it exists on Linux only (`alsa`, `hidraw`).
+    pub linux_only: bool,
     list: fn() -> Result<Vec<Found>, ListError>,
 }
 
 impl Backend {
+    /// Why this build lacks it and how to get it, or `None` when it has it.
+    pub fn missing_reason(&self) -> Option<String> {
+        if self.available {
+            None
+        } else if self.linux_only && !cfg!(target_os = "linux") {
+            Some(format!("the {} backend exists on Linux only, and this is {}", self.name, std::env::consts::OS))
+        } else {
+            Some(format!(
+                "this build of metaplate lacks it: rebuild with the cargo feature `{}` (the binary's default \
+                 `hardware` feature has every backend)",
+                self.feature
+            ))
+        }
+    }
+
     /// What of this backend is connected. Empty when nothing is, when this build lacks the backend, and for the
     /// backends that do not enumerate yet (`nidaqmx`, `alsa`, `hidraw`: issue 16's `metaplate devices`).
     ///
@@ -86,22 +101,6 @@ impl Backend {
     /// [`ListError`] when the system cannot be asked (the bus cannot be read).
     pub fn list(&self) -> Result<Vec<Found>, ListError> {
         if self.available { (self.list)() } else { Ok(Vec::new()) }
-    }
-}
-
-/// Why a backend behind a feature is missing from this build.
-const FEATURE_OFF: &str = "this build of metaplate was compiled without it (enable the cargo feature named here, or \
-                           the binary's default `hardware` feature)";
-/// Why a Linux-only backend is missing elsewhere.
-const LINUX_ONLY: &str = "this backend exists on Linux only";
-
-const fn missing(feature_on: bool, linux_only: bool) -> &'static str {
-    if linux_only && !cfg!(target_os = "linux") {
-        LINUX_ONLY
-    } else if !feature_on {
-        FEATURE_OFF
-    } else {
-        ""
     }
 }
 
@@ -113,7 +112,7 @@ pub const BACKENDS: [Backend; 5] = [
         needs: "the controller's serial port (`port`), read and write access to it",
         feature: "serial",
         available: cfg!(feature = "serial"),
-        missing_reason: missing(cfg!(feature = "serial"), false),
+        linux_only: false,
         list: list_serial,
     },
     Backend {
@@ -122,7 +121,7 @@ pub const BACKENDS: [Backend; 5] = [
         needs: "a DAQ speaking metaplate's USB bulk protocol (`usb = \"VID:PID:SERIAL\"`), access to its USB device",
         feature: "usb-bulk",
         available: cfg!(feature = "usb-bulk"),
-        missing_reason: missing(cfg!(feature = "usb-bulk"), false),
+        linux_only: false,
         list: list_usb,
     },
     Backend {
@@ -131,7 +130,7 @@ pub const BACKENDS: [Backend; 5] = [
         needs: "NI-DAQmx installed (the vendor library is loaded at run time) and the NI device name (`device`)",
         feature: "nidaqmx",
         available: cfg!(feature = "nidaqmx"),
-        missing_reason: missing(cfg!(feature = "nidaqmx"), false),
+        linux_only: false,
         list: list_nothing,
     },
     Backend {
@@ -140,7 +139,7 @@ pub const BACKENDS: [Backend; 5] = [
         needs: "an ALSA PCM (`device`, as `aplay -L` names it) at an exact rate and channel count",
         feature: "alsa",
         available: cfg!(all(feature = "alsa", target_os = "linux")),
-        missing_reason: missing(cfg!(feature = "alsa"), true),
+        linux_only: true,
         list: list_nothing,
     },
     Backend {
@@ -149,7 +148,7 @@ pub const BACKENDS: [Backend; 5] = [
         needs: "a USB HID keyboard (`usb = \"VID:PID[:SERIAL]\"`), read access to its /dev/hidraw node",
         feature: "hidraw",
         available: cfg!(all(feature = "hidraw", target_os = "linux")),
-        missing_reason: missing(cfg!(feature = "hidraw"), true),
+        linux_only: true,
         list: list_nothing,
     },
 ];

@@ -33,12 +33,14 @@ impl std::fmt::Debug for OpenedRig {
 /// [`HardwareError::Device`] naming the first instrument that cannot be opened.
 pub fn open_rig(file: &HardwareFile) -> Result<OpenedRig, HardwareError> {
     for (capability, name) in file.backends() {
-        if let Some(backend) = backends::find(capability, name).filter(|b| !b.available) {
+        if let Some(backend) = backends::find(capability, name)
+            && let Some(reason) = backend.missing_reason()
+        {
             return Err(HardwareError::NotInThisBuild {
                 path: file.path.clone(),
                 key: format!("{}.backend", capability.section()),
                 backend: backend.name,
-                reason: format!("{} (cargo feature `{}`)", backend.missing_reason, backend.feature),
+                reason,
             });
         }
     }
