@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use metaplate_core::rig::Rig;
 use metaplate_core::scene::Scene;
-use metaplate_drivers::{HardwareError, HardwareFile, OpenedRig};
+use metaplate_drivers::{HardwareError, HardwareFile};
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_store::SceneId;
 
@@ -93,21 +93,12 @@ pub fn mock_rig(
 
 /// The plate and rig described by the hardware file at `path`: every instrument opened through its backend (the
 /// audio interface configured once, so that a missing card is found now rather than at the first point), on the
-/// real clock; the keypad, if the file names one, beside the rig.
+/// real clock.
 ///
 /// # Errors
 /// [`RigError::Hardware`] for the file, a backend this build lacks, or the first instrument that cannot be opened;
 /// [`RigError::Plate`] when the wiring does not fit the plate; the plate scene's error.
 pub fn hardware_rig(path: &Path) -> anyhow::Result<(Plate, Rig)> {
-    let (plate, opened) = hardware_rig_with_keypad(path)?;
-    Ok((plate, opened.rig))
-}
-
-/// As [`hardware_rig`], with the keypad.
-///
-/// # Errors
-/// As [`hardware_rig`].
-pub fn hardware_rig_with_keypad(path: &Path) -> anyhow::Result<(Plate, OpenedRig)> {
     let file = HardwareFile::load(path).map_err(RigError::Hardware)?;
     let plate = Plate::resolve(&file.plate)?;
     let actuators = file.wiring.actuator_channels.len();
@@ -119,8 +110,10 @@ pub fn hardware_rig_with_keypad(path: &Path) -> anyhow::Result<(Plate, OpenedRig
         );
         return Err(RigError::Plate { path: path.to_path_buf(), reason }.into());
     }
+    // A keypad, if the file names one, is opened too (so that its absence is found now) and unused: no recipe
+    // reads it yet.
     let opened = metaplate_drivers::open_rig(&file).map_err(RigError::Hardware)?;
-    Ok((plate, opened))
+    Ok((plate, opened.rig))
 }
 
 #[cfg(test)]
