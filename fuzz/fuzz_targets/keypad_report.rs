@@ -13,7 +13,7 @@
 use std::collections::BTreeSet;
 
 use libfuzzer_sys::fuzz_target;
-use metaplate_keypad::report::{BootDecoder, KeyAction, encode, held_keys};
+use metaplate_keypad_protocol::{BootDecoder, KeyAction, encode, held_keys};
 
 fuzz_target!(|data: &[u8]| {
     let mut decoder = BootDecoder::new();

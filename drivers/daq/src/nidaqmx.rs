@@ -72,6 +72,11 @@ pub struct NiDaqmx {
     _library: Library,
 }
 
+// SAFETY: the only field that is not `Send` is the task handle, an opaque pointer owned by NI-DAQmx; NI documents
+// NI-DAQmx as multithread-safe (a task may be used from any thread), and `NiDaqmx` is used by one thread at a time
+// (`&mut self`). `Send` is what lets the rig hand the DAQ to a recipe's thread.
+unsafe impl Send for NiDaqmx {}
+
 impl std::fmt::Debug for NiDaqmx {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("NiDaqmx").field("device", &self.device).field("running", &self.running).finish_non_exhaustive()

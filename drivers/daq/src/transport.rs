@@ -3,6 +3,35 @@
 
 use std::time::Duration;
 
+/// Which device, interface and endpoints to use.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UsbSelector {
+    /// USB vendor id.
+    pub vendor_id: u16,
+    /// USB product id.
+    pub product_id: u16,
+    /// Serial number string descriptor; `None` takes the first device with these ids (only for a lab with one).
+    pub serial: Option<String>,
+    /// Interface number that carries the bulk endpoints.
+    pub interface: u8,
+    /// Bulk OUT endpoint address (commands), e.g. `0x01`.
+    pub endpoint_out: u8,
+    /// Bulk IN endpoint address (replies and samples), e.g. `0x81`.
+    pub endpoint_in: u8,
+}
+
+/// Replaces the open handle in `slot` by a fresh one from `open`, dropping the old one *first*: a device's
+/// interface (or a port) can be claimed by one handle at a time, so opening before closing fails against a device
+/// that is there. On failure the slot stays empty (the transport reports `Disconnected` until a reopen succeeds).
+///
+/// # Errors
+/// `open`'s error.
+pub fn reopen_dropping_first<H, E>(slot: &mut Option<H>, open: impl FnOnce() -> Result<H, E>) -> Result<(), E> {
+    drop(slot.take());
+    *slot = Some(open()?);
+    Ok(())
+}
+
 /// Why a transfer failed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum TransportError {
@@ -24,7 +53,7 @@ pub enum TransportError {
 
 /// One bulk OUT and one bulk IN endpoint of a device.
 ///
-/// Implemented by [`crate::UsbTransport`] (a real device through nusb) and by the mock DAQ's in-process
+/// Implemented by `UsbTransport` (feature `usb`: a real device through nusb) and by the mock DAQ's in-process
 /// transport.
 pub trait BulkTransport {
     /// Sends `bytes` as one OUT transfer, waiting at most `timeout`.
@@ -46,4 +75,52 @@ pub trait BulkTransport {
     /// # Errors
     /// `Disconnected` if the device is still absent, `Other` if it cannot be claimed.
     fn reopen(&mut self) -> Result<(), TransportError>;
+}
+
+#[cfg(test)]
+mod tests {
+    use std::cell::Cell;
+    use std::rc::Rc;
+
+    use super::*;
+
+    /// A handle of a fake device that can be claimed once at a time, as a USB interface.
+    struct Claim(Rc<Cell<u32>>);
+
+    impl Drop for Claim {
+        fn drop(&mut self) {
+            self.0.set(self.0.get() - 1);
+        }
+    }
+
+    /// Opens a claim, refusing (as the kernel does for a claimed interface) while another one is alive.
+    fn claim(alive: &Rc<Cell<u32>>) -> Result<Claim, String> {
+        if alive.get() > 0 {
+            return Err("interface busy: still claimed by the old handle".into());
+        }
+        alive.set(alive.get() + 1);
+        Ok(Claim(Rc::clone(alive)))
+    }
+
+    #[test]
+    fn a_reopen_releases_the_old_handle_before_claiming_again() {
+        let alive = Rc::new(Cell::new(0));
+        let mut slot = claim(&alive).ok();
+        assert!(slot.is_some());
+        for _ in 0..3 {
+            assert_eq!(reopen_dropping_first(&mut slot, || claim(&alive)), Ok(()));
+            assert_eq!(alive.get(), 1);
+        }
+        // Opening before dropping (the old `*self = Self::open(..)`) is refused by the same fake device.
+        assert!(claim(&alive).is_err());
+    }
+
+    #[test]
+    fn a_failed_reopen_leaves_the_transport_closed() {
+        let alive = Rc::new(Cell::new(0));
+        let mut slot = claim(&alive).ok();
+        assert_eq!(reopen_dropping_first(&mut slot, || Err::<Claim, _>("device absent")), Err("device absent"));
+        assert!(slot.is_none());
+        assert_eq!(alive.get(), 0);
+    }
 }

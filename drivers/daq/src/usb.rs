@@ -7,32 +7,53 @@ use metaplate_daq_protocol::MAX_FRAME_LEN;
 use nusb::transfer::{Buffer, Bulk, Completion, In, Out, TransferError};
 use nusb::{Endpoint, Interface, MaybeFuture};
 
-use crate::transport::{BulkTransport, TransportError};
+use crate::transport::{BulkTransport, TransportError, UsbSelector, reopen_dropping_first};
 
-/// Which device, interface and endpoints to use.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct UsbSelector {
-    /// USB vendor id.
-    pub vendor_id: u16,
-    /// USB product id.
-    pub product_id: u16,
-    /// Serial number string descriptor; `None` takes the first device with these ids (only for a lab with one).
-    pub serial: Option<String>,
-    /// Interface number that carries the bulk endpoints.
-    pub interface: u8,
-    /// Bulk OUT endpoint address (commands), e.g. `0x01`.
-    pub endpoint_out: u8,
-    /// Bulk IN endpoint address (replies and samples), e.g. `0x81`.
-    pub endpoint_in: u8,
-}
-
-/// An open USB device: its claimed interface and its two bulk endpoints.
+/// A USB device on metaplate's bulk protocol, found by vendor id, product id and serial number; its handles are
+/// absent between a failed reopen and the next successful one (every transfer is then `Disconnected`).
 pub struct UsbTransport {
     selector: UsbSelector,
+    link: Option<UsbLink>,
+}
+
+/// The open device: its claimed interface and its two bulk endpoints.
+struct UsbLink {
     ep_out: Endpoint<Bulk, Out>,
     ep_in: Endpoint<Bulk, In>,
     /// Kept so the interface stays claimed while the endpoints are in use.
     _interface: Interface,
+}
+
+/// A device this system lists on USB (for `metaplate devices`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UsbListing {
+    /// USB vendor id.
+    pub vendor_id: u16,
+    /// USB product id.
+    pub product_id: u16,
+    /// Serial number string descriptor, if the device has one.
+    pub serial: Option<String>,
+    /// Manufacturer and product strings, empty when unknown.
+    pub description: String,
+}
+
+/// The USB devices this system lists (empty when there are none).
+///
+/// # Errors
+/// [`TransportError::Other`] when the bus cannot be listed.
+pub fn usb_devices() -> Result<Vec<UsbListing>, TransportError> {
+    let devices = nusb::list_devices().wait().map_err(|e| nusb_error("listing USB devices", e))?;
+    Ok(devices
+        .map(|d| {
+            let names = [d.manufacturer_string().unwrap_or_default(), d.product_string().unwrap_or_default()];
+            UsbListing {
+                vendor_id: d.vendor_id(),
+                product_id: d.product_id(),
+                serial: d.serial_number().map(str::to_string),
+                description: names.join(" ").trim().to_string(),
+            }
+        })
+        .collect())
 }
 
 impl std::fmt::Debug for UsbTransport {
@@ -59,31 +80,42 @@ impl UsbTransport {
     /// [`TransportError::Disconnected`] if no device matches; [`TransportError::Other`] if it cannot be opened or
     /// claimed (permissions, a kernel driver holding it, no such endpoint).
     pub fn open(selector: UsbSelector) -> Result<Self, TransportError> {
-        let found = nusb::list_devices()
-            .wait()
-            .map_err(|e| nusb_error("listing USB devices", e))?
-            .find(|d| {
-                d.vendor_id() == selector.vendor_id
-                    && d.product_id() == selector.product_id
-                    && selector.serial.as_deref().is_none_or(|s| d.serial_number() == Some(s))
-            })
-            .ok_or_else(|| {
-                TransportError::Disconnected(format!(
-                    "no USB device {:04x}:{:04x} with serial {:?}",
-                    selector.vendor_id, selector.product_id, selector.serial
-                ))
-            })?;
-        let device = found.open().wait().map_err(|e| nusb_error("opening the device", e))?;
-        let interface =
-            device.claim_interface(selector.interface).wait().map_err(|e| nusb_error("claiming the interface", e))?;
-        let ep_out = interface
-            .endpoint::<Bulk, Out>(selector.endpoint_out)
-            .map_err(|e| nusb_error("opening the bulk OUT endpoint", e))?;
-        let ep_in = interface
-            .endpoint::<Bulk, In>(selector.endpoint_in)
-            .map_err(|e| nusb_error("opening the bulk IN endpoint", e))?;
-        Ok(Self { selector, ep_out, ep_in, _interface: interface })
+        let link = open_link(&selector)?;
+        Ok(Self { selector, link: Some(link) })
     }
+
+    /// The open link, or `Disconnected` after a failed reopen.
+    fn link(&mut self) -> Result<&mut UsbLink, TransportError> {
+        self.link.as_mut().ok_or_else(|| TransportError::Disconnected("the device is closed (reopen failed)".into()))
+    }
+}
+
+/// Finds the device, opens it and claims the interface and endpoints (see [`UsbTransport::open`]).
+fn open_link(selector: &UsbSelector) -> Result<UsbLink, TransportError> {
+    let found = nusb::list_devices()
+        .wait()
+        .map_err(|e| nusb_error("listing USB devices", e))?
+        .find(|d| {
+            d.vendor_id() == selector.vendor_id
+                && d.product_id() == selector.product_id
+                && selector.serial.as_deref().is_none_or(|s| d.serial_number() == Some(s))
+        })
+        .ok_or_else(|| {
+            TransportError::Disconnected(format!(
+                "no USB device {:04x}:{:04x} with serial {:?}",
+                selector.vendor_id, selector.product_id, selector.serial
+            ))
+        })?;
+    let device = found.open().wait().map_err(|e| nusb_error("opening the device", e))?;
+    let interface =
+        device.claim_interface(selector.interface).wait().map_err(|e| nusb_error("claiming the interface", e))?;
+    let ep_out = interface
+        .endpoint::<Bulk, Out>(selector.endpoint_out)
+        .map_err(|e| nusb_error("opening the bulk OUT endpoint", e))?;
+    let ep_in = interface
+        .endpoint::<Bulk, In>(selector.endpoint_in)
+        .map_err(|e| nusb_error("opening the bulk IN endpoint", e))?;
+    Ok(UsbLink { ep_out, ep_in, _interface: interface })
 }
 
 /// Maps a completed transfer's status; a stall is cleared here so the caller may retry.
@@ -106,23 +138,25 @@ fn status<Dir: nusb::transfer::EndpointDirection>(
 impl BulkTransport for UsbTransport {
     fn write(&mut self, bytes: &[u8], timeout: Duration) -> Result<(), TransportError> {
         // `transfer_blocking` asserts that nothing is pending; this transport never leaves a transfer pending.
-        if self.ep_out.pending() != 0 {
+        let link = self.link()?;
+        if link.ep_out.pending() != 0 {
             return Err(TransportError::Other("a previous OUT transfer is still pending".into()));
         }
-        let completion = self.ep_out.transfer_blocking(Buffer::from(bytes.to_vec()), timeout);
-        status(&completion, &mut self.ep_out)
+        let completion = link.ep_out.transfer_blocking(Buffer::from(bytes.to_vec()), timeout);
+        status(&completion, &mut link.ep_out)
     }
 
     fn read(&mut self, timeout: Duration) -> Result<Vec<u8>, TransportError> {
-        if self.ep_in.pending() != 0 {
+        let link = self.link()?;
+        if link.ep_in.pending() != 0 {
             return Err(TransportError::Other("a previous IN transfer is still pending".into()));
         }
         // IN requests must be a whole number of max-size packets; one maximum frame fits.
-        let packet = self.ep_in.max_packet_size().max(1);
+        let packet = link.ep_in.max_packet_size().max(1);
         let len = MAX_FRAME_LEN.div_ceil(packet) * packet;
-        let completion = self.ep_in.transfer_blocking(self.ep_in.allocate(len), timeout);
+        let completion = link.ep_in.transfer_blocking(link.ep_in.allocate(len), timeout);
         let received = completion.buffer.get(..completion.actual_len).map(<[u8]>::to_vec).unwrap_or_default();
-        match status(&completion, &mut self.ep_in) {
+        match status(&completion, &mut link.ep_in) {
             // A transfer cancelled at the timeout may still have carried bytes: keep them.
             Err(TransportError::Timeout) if !received.is_empty() => Ok(received),
             Err(e) => Err(e),
@@ -131,7 +165,8 @@ impl BulkTransport for UsbTransport {
     }
 
     fn reopen(&mut self) -> Result<(), TransportError> {
-        *self = Self::open(self.selector.clone())?;
-        Ok(())
+        // The old handle still claims the interface: it must be released before the device is claimed again.
+        let selector = &self.selector;
+        reopen_dropping_first(&mut self.link, || open_link(selector))
     }
 }

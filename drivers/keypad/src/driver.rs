@@ -5,8 +5,8 @@ use std::sync::Arc;
 
 use metaplate_core::clock::Clock;
 
-use crate::report::{BootDecoder, Key, KeyAction, ReportError};
 use crate::transport::{HidInput, TransportError};
+use metaplate_keypad_protocol::{BootDecoder, Key, KeyAction, ReportError};
 
 /// One key press or release.
 #[derive(Debug, Clone, Copy, PartialEq)]

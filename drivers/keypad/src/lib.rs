@@ -2,17 +2,21 @@
 //!
 //! The keypad is any USB HID device that enumerates as a keyboard and sends boot keyboard reports (a response pad
 //! or a plain keyboard): there is no protocol of ours here, only the HID standard.
-//! - [`report`]: sans-IO codec of boot keyboard reports: diffing successive reports into key-down/key-up changes.
+//! - [`report`]: the sans-IO codec of boot keyboard reports (`metaplate-keypad-protocol`, re-exported).
 //! - [`transport`]: [`HidInput`], the narrow transport (read one report with a timeout, reopen).
-//! - [`hidapi`]: the real transport on the `hidapi` crate (pure-Rust hidraw backend on Linux: no libudev).
+//! - [`hidapi`] (feature `hidraw`, Linux only): the real transport on the `hidapi` crate (pure-Rust hidraw backend:
+//!   no libudev).
 //! - [`driver`]: [`Keypad`], timestamped [`KeyEvent`]s on a [`metaplate_core::clock::Clock`].
 
 pub mod driver;
+#[cfg(all(feature = "hidraw", target_os = "linux"))]
 pub mod hidapi;
-pub mod report;
 pub mod transport;
 
+pub use metaplate_keypad_protocol as report;
+
+#[cfg(all(feature = "hidraw", target_os = "linux"))]
 pub use self::hidapi::{HidapiInput, HidapiSelector};
 pub use driver::{KeyEvent, Keypad, KeypadError, ReportPrefix};
-pub use report::{BootDecoder, Key, KeyAction, KeyChange, ReportError};
+pub use metaplate_keypad_protocol::{BootDecoder, Key, KeyAction, KeyChange, ReportError};
 pub use transport::{HidInput, TransportError};

@@ -32,3 +32,18 @@ pub trait HidInput: Send {
     /// [`TransportError::Disconnected`] while it is still absent.
     fn reopen(&mut self) -> Result<(), TransportError>;
 }
+
+/// A boxed transport is a transport, so that a keypad can be built on whichever backend a hardware file names.
+impl<T: HidInput + ?Sized> HidInput for Box<T> {
+    fn describe(&self) -> (String, String, String) {
+        (**self).describe()
+    }
+
+    fn read_report(&mut self, timeout_s: f64) -> Result<Option<Vec<u8>>, TransportError> {
+        (**self).read_report(timeout_s)
+    }
+
+    fn reopen(&mut self) -> Result<(), TransportError> {
+        (**self).reopen()
+    }
+}

@@ -4,6 +4,7 @@
 //! access to its `/dev/hidraw*` node. Run with
 //! `METAPLATE_KEYPAD=046d:c31c cargo test -p metaplate-keypad --test real_device -- --ignored --nocapture`
 //! and press and release one key within 10 s.
+#![cfg(target_os = "linux")] // hidapi's hidraw backend, the `hidraw` feature's transport, is Linux only.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may unwrap: a panic is the test failing
 
 use std::sync::Arc;

@@ -1,7 +1,7 @@
 //! Driver for the scanning laser Doppler vibrometer's controller on a serial line.
 //!
 //! [`LdvDriver`] implements [`metaplate_core::vibrometer::Vibrometer`] over any [`SerialLine`]: the real port
-//! ([`SerialPortLine`], `serialport` built without libudev) or a mock (`metaplate-mock-ldv`, in process or on a
+//! (`SerialPortLine`, feature `serial`: `serialport` built without libudev) or a mock (`metaplate-mock-ldv`, in process or on a
 //! pseudo-terminal). The wire protocol, its timeouts and its `SYNC` resynchronisation are specified in
 //! `metaplate-ldv-protocol`; this crate adds the I/O, the bounded retries and the reconnect.
 //!
@@ -12,9 +12,11 @@
 mod driver;
 mod line;
 mod policy;
+#[cfg(feature = "serial")]
 mod serial;
 
 pub use driver::{AppliedSettings, LdvDriver};
-pub use line::{LineError, SerialLine};
+pub use line::{BAUD_RATE, LineError, PortSelector, SerialLine};
 pub use policy::RetryPolicy;
-pub use serial::{BAUD_RATE, PortSelector, SerialPortLine};
+#[cfg(feature = "serial")]
+pub use serial::{PortListing, SerialPortLine, available_ports};

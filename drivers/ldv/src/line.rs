@@ -1,4 +1,23 @@
-//! The narrow transport the driver needs: a byte line with timed reads, that can be reopened.
+//! The narrow transport the driver needs: a byte line with timed reads, that can be reopened; and how a real port
+//! is named (built without the `serial` backend, so that a hardware file can be checked anywhere).
+
+use std::path::PathBuf;
+
+/// The controller's line settings: 115200 baud, 8N1, no flow control (protocol specification, section 1).
+pub const BAUD_RATE: u32 = 115_200;
+
+/// Where to find the controller's port.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PortSelector {
+    /// A device path: `/dev/ttyUSB0`, or better a stable one such as `/dev/serial/by-id/usb-FTDI_..._SN04512-if00-port0`
+    /// (udev's by-id links name the adapter's serial number and survive re-enumeration).
+    Path(PathBuf),
+    /// The USB serial number of the adapter, looked up with `serialport::available_ports()` at every open. Without
+    /// libudev that listing reads sysfs (`/sys/class/tty`); where sysfs carries no USB metadata (some containers,
+    /// non-Linux systems without it), the lookup finds nothing: use a `/dev/serial/by-id/...` [`PortSelector::Path`]
+    /// instead.
+    UsbSerial(String),
+}
 
 /// Why a line operation failed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -14,7 +33,7 @@ pub enum LineError {
     },
 }
 
-/// A serial line to one device: the real port ([`crate::SerialPortLine`]) or a mock.
+/// A serial line to one device: the real port (`SerialPortLine`, feature `serial`) or a mock.
 ///
 /// Reads are bounded: an implementation waits at most the timeout it is given, in real time for a real port; a
 /// mock that has decided not to answer returns [`LineError::Timeout`] at once, so simulated faults cost no wall

@@ -6,23 +6,7 @@ use std::time::Duration;
 
 use serialport::{DataBits, FlowControl, Parity, SerialPort, SerialPortType, StopBits};
 
-use crate::line::{LineError, SerialLine};
-
-/// The controller's line settings: 115200 baud, 8N1, no flow control (protocol specification, section 1).
-pub const BAUD_RATE: u32 = 115_200;
-
-/// Where to find the controller's port.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum PortSelector {
-    /// A device path: `/dev/ttyUSB0`, or better a stable one such as `/dev/serial/by-id/usb-FTDI_..._SN04512-if00-port0`
-    /// (udev's by-id links name the adapter's serial number and survive re-enumeration).
-    Path(PathBuf),
-    /// The USB serial number of the adapter, looked up with `serialport::available_ports()` at every open. Without
-    /// libudev that listing reads sysfs (`/sys/class/tty`); where sysfs carries no USB metadata (some containers,
-    /// non-Linux systems without it), the lookup finds nothing: use a `/dev/serial/by-id/...` [`PortSelector::Path`]
-    /// instead.
-    UsbSerial(String),
-}
+use crate::line::{BAUD_RATE, LineError, PortSelector, SerialLine};
 
 /// The controller's serial port. Reads wait in real time; after a disconnect every call fails with
 /// [`LineError::Disconnected`] until [`SerialLine::reopen`] succeeds.
@@ -113,6 +97,45 @@ fn open_port(selector: &PortSelector) -> Result<Box<dyn SerialPort>, LineError> 
         .timeout(Duration::from_millis(250))
         .open()
         .map_err(|e| LineError::Disconnected { reason: format!("cannot open {name}: {e}") })
+}
+
+/// A serial port the system lists, with its USB adapter's identity where it has one.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PortListing {
+    /// The device path to name in a hardware file (`ldv.port`).
+    pub path: PathBuf,
+    /// USB vendor and product id of the adapter, if it is one.
+    pub usb_ids: Option<(u16, u16)>,
+    /// USB serial number of the adapter (usable as [`PortSelector::UsbSerial`]), if it reports one.
+    pub usb_serial: Option<String>,
+    /// Manufacturer and product strings of the adapter, empty when unknown.
+    pub description: String,
+}
+
+/// The serial ports this system lists (empty when it lists none).
+///
+/// # Errors
+/// [`LineError::Disconnected`] with the operating system's reason when the ports cannot be listed (on Linux
+/// without `/sys/class/tty`, say a container, the list is empty instead: `serialport` would panic there).
+pub fn available_ports() -> Result<Vec<PortListing>, LineError> {
+    if !Path::new("/sys/class/tty").is_dir() && cfg!(target_os = "linux") {
+        return Ok(Vec::new());
+    }
+    let ports = serialport::available_ports()
+        .map_err(|e| LineError::Disconnected { reason: format!("cannot list serial ports: {e}") })?;
+    Ok(ports
+        .into_iter()
+        .map(|port| {
+            let (usb_ids, usb_serial, description) = match port.port_type {
+                SerialPortType::UsbPort(usb) => {
+                    let names = [usb.manufacturer.unwrap_or_default(), usb.product.unwrap_or_default()];
+                    (Some((usb.vid, usb.pid)), usb.serial_number, names.join(" ").trim().to_string())
+                }
+                _ => (None, None, String::new()),
+            };
+            PortListing { path: PathBuf::from(port.port_name), usb_ids, usb_serial, description }
+        })
+        .collect())
 }
 
 /// The port whose USB adapter reports serial number `serial` (exact match).

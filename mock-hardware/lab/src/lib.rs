@@ -153,7 +153,7 @@ pub enum LdvLink {
     /// An in-process `SerialLine` (no I/O; timeouts cost virtual time only). The default.
     #[default]
     InProcess,
-    /// A pseudo-terminal served by a thread, opened with the real `serialport` transport.
+    /// A pseudo-terminal served by a thread, opened with the real `serialport` transport (feature `pty`, Unix only).
     Pty,
 }
 
@@ -229,6 +229,7 @@ pub struct MockLab {
     windows: FaultWindows,
     wiring: Wiring,
     rig_taken: Mutex<bool>,
+    #[cfg_attr(not(feature = "pty"), allow(dead_code))] // Only the pseudo-terminal link fills it.
     pty: Mutex<Option<PtyServer>>,
 }
 
@@ -365,6 +366,7 @@ impl MockLab {
                 LdvDriver::new(MockLine::new(Arc::clone(&self.ldv)), Arc::clone(&clock), RetryPolicy::default())
                     .map_err(ldv_error)?,
             ),
+            #[cfg(feature = "pty")]
             LdvLink::Pty => {
                 let server = PtyServer::spawn(Arc::clone(&self.ldv))?;
                 let selector = metaplate_ldv::PortSelector::Path(server.path().to_path_buf());
@@ -372,6 +374,14 @@ impl MockLab {
                     .map_err(|e| LabError::Driver { device: "LDV", detail: e.to_string() })?;
                 *self.pty.lock().map_err(|_| LabError::Poisoned("the pty slot"))? = Some(server);
                 Box::new(LdvDriver::new(line, Arc::clone(&clock), RetryPolicy::default()).map_err(ldv_error)?)
+            }
+            // The real serial transport is a backend (`metaplate-ldv`'s feature `serial`), not built here.
+            #[cfg(not(feature = "pty"))]
+            LdvLink::Pty => {
+                return Err(LabError::Driver {
+                    device: "LDV",
+                    detail: "this build of the mock lab has no pseudo-terminal link (feature `pty`)".into(),
+                });
             }
         };
         let source = Box::new(chain::LabSource(self.shared.clone()));

@@ -8,13 +8,17 @@
 //!   with or without power cycle, dropout), deterministic under its seed, and optionally advances a
 //!   `VirtualClock` by each command's specified response time.
 //! - Served two ways: [`MockLine`], an in-process `SerialLine` for fast tests (timeouts cost no wall time), and
-//!   [`PtyServer`], a pseudo-terminal in raw mode served by a background thread, so that the real
-//!   `SerialPortLine` transport is exercised.
+//!   [`PtyServer`], a pseudo-terminal in raw mode served by a background thread (Unix only; elsewhere it refuses to
+//!   start), so that the real `SerialPortLine` transport (`metaplate-ldv`'s feature `serial`) is exercised.
 
 mod controller;
 mod device;
 mod faults;
 mod inprocess;
+#[cfg(unix)]
+mod pty;
+#[cfg(not(unix))]
+#[path = "pty_unsupported.rs"]
 mod pty;
 mod speckle;
 

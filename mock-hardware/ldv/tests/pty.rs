@@ -3,6 +3,7 @@
 //! and every test bounds its wall time.
 
 // Test helpers, not only #[test] functions, may unwrap: a failure is the test failing.
+#![cfg(unix)] // pseudo-terminals
 #![allow(clippy::unwrap_used)]
 
 use std::path::PathBuf;

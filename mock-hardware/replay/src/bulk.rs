@@ -10,9 +10,9 @@ use crate::dialect::DaqDialect;
 use crate::engine::{ByteReplay, Mismatch, ReplayStats};
 use crate::failure::Failure;
 use crate::faults::ReplayFaults;
-use crate::load::{ReplayError, check_kind};
+use crate::load::ReplayError;
 use crate::recorder::Recorder;
-use crate::script::{EP_CONTROL, EP_IN, EP_OUT, byte_steps};
+use crate::script::{EP_CONTROL, EP_IN, EP_OUT};
 
 impl From<&TransportError> for Failure {
     fn from(e: &TransportError) -> Self {
@@ -110,9 +110,7 @@ impl ReplayTransport {
     /// # Errors
     /// [`ReplayError::WrongDevice`] unless the cassette is a DAQ USB session.
     pub fn new(cassette: &Cassette, faults: ReplayFaults) -> Result<Self, ReplayError> {
-        check_kind(cassette, DeviceKind::DaqUsb)?;
-        let (steps, ignored) = byte_steps(&cassette.records);
-        let engine = ByteReplay::new(steps, ignored, cassette.records.len(), faults, Box::new(DaqDialect::default()));
+        let engine = ByteReplay::for_cassette(cassette, DeviceKind::DaqUsb, faults, Box::new(DaqDialect::default()))?;
         Ok(Self { engine })
     }
 

@@ -6,7 +6,10 @@ use std::fmt;
 
 use crate::failure::Failure;
 use crate::faults::{FaultKind, ReplayFaults};
-use crate::script::Step;
+use metaplate_cassette::{Cassette, DeviceKind};
+
+use crate::load::{ReplayError, check_kind};
+use crate::script::{Step, byte_steps};
 
 /// What a device's protocol lets the replay do beyond byte equality, once an injected fault has made the driver
 /// retry: recognise a resent command whose per-attempt fields changed, answer commands the recording cannot
@@ -181,7 +184,23 @@ pub(crate) struct ByteReplay {
 }
 
 impl ByteReplay {
-    pub(crate) fn new(
+    /// The replay of `cassette`, which must be a session of `kind` (the one constructor of the byte replays: the
+    /// LDV line's and the DAQ transport's).
+    ///
+    /// # Errors
+    /// [`ReplayError::WrongDevice`] when the cassette is of another device.
+    pub(crate) fn for_cassette(
+        cassette: &Cassette,
+        kind: DeviceKind,
+        faults: ReplayFaults,
+        dialect: Box<dyn Dialect>,
+    ) -> Result<Self, ReplayError> {
+        check_kind(cassette, kind)?;
+        let (steps, ignored) = byte_steps(&cassette.records);
+        Ok(Self::new(steps, ignored, cassette.records.len(), faults, dialect))
+    }
+
+    fn new(
         steps: Vec<Step>,
         ignored_records: usize,
         records: usize,

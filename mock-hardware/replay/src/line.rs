@@ -9,9 +9,9 @@ use crate::dialect::LdvDialect;
 use crate::engine::{ByteReplay, Mismatch, ReplayStats};
 use crate::failure::Failure;
 use crate::faults::ReplayFaults;
-use crate::load::{ReplayError, check_kind};
+use crate::load::ReplayError;
 use crate::recorder::Recorder;
-use crate::script::{EP_CONTROL, EP_IN, EP_OUT, byte_steps};
+use crate::script::{EP_CONTROL, EP_IN, EP_OUT};
 
 impl From<&LineError> for Failure {
     fn from(e: &LineError) -> Self {
@@ -111,9 +111,7 @@ impl ReplayLine {
     /// # Errors
     /// [`ReplayError::WrongDevice`] unless the cassette is an LDV serial session.
     pub fn new(cassette: &Cassette, faults: ReplayFaults) -> Result<Self, ReplayError> {
-        check_kind(cassette, DeviceKind::LdvSerial)?;
-        let (steps, ignored) = byte_steps(&cassette.records);
-        let engine = ByteReplay::new(steps, ignored, cassette.records.len(), faults, Box::new(LdvDialect));
+        let engine = ByteReplay::for_cassette(cassette, DeviceKind::LdvSerial, faults, Box::new(LdvDialect))?;
         Ok(Self { engine, carry: Vec::new() })
     }
 

@@ -1,4 +1,4 @@
-//! Sans-IO codec of the USB HID boot keyboard input report (Device Class Definition for HID 1.11, appendix B.1;
+//! Sans-IO codec of the USB HID boot keyboard input report, as a response keypad sends it (Device Class Definition for HID 1.11, appendix B.1;
 //! key codes from the HID Usage Tables, keyboard/keypad page 0x07).
 //!
 //! A boot report is 8 bytes: a modifier bitmap (bit `i` is usage `0xE0 + i`: left Ctrl, Shift, Alt, GUI, then the

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeSet;
 
-use metaplate_keypad::report::{BootDecoder, Key, KeyAction, KeyChange, ReportError, encode, held_keys};
+use metaplate_keypad_protocol::{BootDecoder, Key, KeyAction, KeyChange, ReportError, encode, held_keys};
 use proptest::prelude::*;
 
 fn key(usage: u8) -> Key {

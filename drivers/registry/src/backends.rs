@@ -1,0 +1,214 @@
+//! One table of backends per capability: each backend's name in the hardware file, what it needs, whether this
+//! build has it, and what of it is connected (for `metaplate devices`).
+
+/// An instrument's capability, as the hardware file's sections name them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Capability {
+    /// `[ldv]`: the scanning vibrometer ([`metaplate_core::vibrometer::Vibrometer`]).
+    Vibrometer,
+    /// `[daq]`: the DAQ ([`metaplate_core::daq::Daq`]).
+    Daq,
+    /// `[audio]`: the audio interface ([`metaplate_core::audio::AudioOut`]).
+    Audio,
+    /// `[keypad]`: the response keypad (optional; beside the rig, not in it).
+    Keypad,
+}
+
+impl Capability {
+    /// Every capability, in the hardware file's order.
+    pub const ALL: [Capability; 4] = [Capability::Vibrometer, Capability::Daq, Capability::Audio, Capability::Keypad];
+
+    /// Its section in the hardware file.
+    pub fn section(self) -> &'static str {
+        match self {
+            Capability::Vibrometer => "ldv",
+            Capability::Daq => "daq",
+            Capability::Audio => "audio",
+            Capability::Keypad => "keypad",
+        }
+    }
+
+    /// The instrument, as messages name it.
+    pub fn noun(self) -> &'static str {
+        match self {
+            Capability::Vibrometer => "LDV",
+            Capability::Daq => "DAQ",
+            Capability::Audio => "audio interface",
+            Capability::Keypad => "keypad",
+        }
+    }
+}
+
+/// Something connected that a backend could open, with what the hardware file writes to name it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Found {
+    /// The key to set (`ldv.port`, `daq.usb`).
+    pub key: &'static str,
+    /// Its value (`/dev/ttyUSB0`, `1209:0001:SN0001`).
+    pub value: String,
+    /// What the system says it is (manufacturer, product), empty when it says nothing.
+    pub description: String,
+}
+
+/// Why a backend could not list what is connected.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("cannot list {backend} devices: {detail}")]
+pub struct ListError {
+    /// The backend.
+    pub backend: &'static str,
+    /// The system's reason.
+    pub detail: String,
+}
+
+/// One backend of a capability.
+#[derive(Debug, Clone, Copy)]
+pub struct Backend {
+    /// Its capability.
+    pub capability: Capability,
+    /// Its name in the hardware file (`backend = "..."`).
+    pub name: &'static str,
+    /// What it needs, in a sentence (keys of its section, system libraries, permissions).
+    pub needs: &'static str,
+    /// The cargo feature of `metaplate-drivers` (and of the binary) that builds it.
+    pub feature: &'static str,
+    /// Whether this build has it.
+    pub available: bool,
+    /// Whether it exists on Linux only (`alsa`, `hidraw`).
+    pub linux_only: bool,
+    list: fn() -> Result<Vec<Found>, ListError>,
+}
+
+impl Backend {
+    /// Why this build lacks it and how to get it, or `None` when it has it.
+    pub fn missing_reason(&self) -> Option<String> {
+        if self.available {
+            None
+        } else if self.linux_only && !cfg!(target_os = "linux") {
+            Some(format!("the {} backend exists on Linux only, and this is {}", self.name, std::env::consts::OS))
+        } else {
+            Some(format!(
+                "this build of metaplate lacks it: rebuild with the cargo feature `{}` (the binary's default \
+                 `hardware` feature has every backend)",
+                self.feature
+            ))
+        }
+    }
+
+    /// What of this backend is connected. Empty when nothing is, when this build lacks the backend, and for the
+    /// backends that do not enumerate yet (`nidaqmx`, `alsa`, `hidraw`: issue 16's `metaplate devices`).
+    ///
+    /// # Errors
+    /// [`ListError`] when the system cannot be asked (the bus cannot be read).
+    pub fn list(&self) -> Result<Vec<Found>, ListError> {
+        if self.available { (self.list)() } else { Ok(Vec::new()) }
+    }
+}
+
+/// Every backend of every capability.
+pub const BACKENDS: [Backend; 5] = [
+    Backend {
+        capability: Capability::Vibrometer,
+        name: "serial",
+        needs: "the controller's serial port (`port`), read and write access to it",
+        feature: "serial",
+        available: cfg!(feature = "serial"),
+        linux_only: false,
+        list: list_serial,
+    },
+    Backend {
+        capability: Capability::Daq,
+        name: "usb-bulk",
+        needs: "a DAQ speaking metaplate's USB bulk protocol (`usb = \"VID:PID:SERIAL\"`), access to its USB device",
+        feature: "usb-bulk",
+        available: cfg!(feature = "usb-bulk"),
+        linux_only: false,
+        list: list_usb,
+    },
+    Backend {
+        capability: Capability::Daq,
+        name: "nidaqmx",
+        needs: "NI-DAQmx installed (the vendor library is loaded at run time) and the NI device name (`device`)",
+        feature: "nidaqmx",
+        available: cfg!(feature = "nidaqmx"),
+        linux_only: false,
+        list: list_nothing,
+    },
+    Backend {
+        capability: Capability::Audio,
+        name: "alsa",
+        needs: "an ALSA PCM (`device`, as `aplay -L` names it) at an exact rate and channel count",
+        feature: "alsa",
+        available: cfg!(all(feature = "alsa", target_os = "linux")),
+        linux_only: true,
+        list: list_nothing,
+    },
+    Backend {
+        capability: Capability::Keypad,
+        name: "hidraw",
+        needs: "a USB HID keyboard (`usb = \"VID:PID[:SERIAL]\"`), read access to its /dev/hidraw node",
+        feature: "hidraw",
+        available: cfg!(all(feature = "hidraw", target_os = "linux")),
+        linux_only: true,
+        list: list_nothing,
+    },
+];
+
+/// The backends of `capability`.
+pub fn of(capability: Capability) -> impl Iterator<Item = &'static Backend> {
+    BACKENDS.iter().filter(move |b| b.capability == capability)
+}
+
+/// The backend of `capability` named `name`, if there is one.
+pub fn find(capability: Capability, name: &str) -> Option<&'static Backend> {
+    of(capability).find(|b| b.name == name)
+}
+
+/// The names of `capability`'s backends.
+pub(crate) fn names(capability: Capability) -> Vec<&'static str> {
+    of(capability).map(|b| b.name).collect()
+}
+
+/// For the backends that cannot enumerate their devices yet.
+fn list_nothing() -> Result<Vec<Found>, ListError> {
+    Ok(Vec::new())
+}
+
+#[cfg(feature = "serial")]
+fn list_serial() -> Result<Vec<Found>, ListError> {
+    let ports = metaplate_ldv::available_ports().map_err(|e| ListError { backend: "serial", detail: e.to_string() })?;
+    Ok(ports
+        .into_iter()
+        .map(|port| {
+            let usb = port.usb_ids.map(|(vid, pid)| match &port.usb_serial {
+                Some(serial) => format!("USB {vid:04x}:{pid:04x} serial {serial}"),
+                None => format!("USB {vid:04x}:{pid:04x}"),
+            });
+            let description = [usb.unwrap_or_default(), port.description].join(" ").trim().to_string();
+            Found { key: "ldv.port", value: port.path.display().to_string(), description }
+        })
+        .collect())
+}
+
+#[cfg(not(feature = "serial"))]
+fn list_serial() -> Result<Vec<Found>, ListError> {
+    Ok(Vec::new())
+}
+
+/// Every USB device with a serial number (a bulk DAQ is named by one); which are DAQs is not known from the bus.
+#[cfg(feature = "usb-bulk")]
+fn list_usb() -> Result<Vec<Found>, ListError> {
+    let devices = metaplate_daq::usb_devices().map_err(|e| ListError { backend: "usb-bulk", detail: e.to_string() })?;
+    Ok(devices
+        .into_iter()
+        .filter_map(|d| {
+            let serial = d.serial?;
+            let value = format!("{:04x}:{:04x}:{serial}", d.vendor_id, d.product_id);
+            Some(Found { key: "daq.usb", value, description: d.description })
+        })
+        .collect())
+}
+
+#[cfg(not(feature = "usb-bulk"))]
+fn list_usb() -> Result<Vec<Found>, ListError> {
+    Ok(Vec::new())
+}

@@ -1,0 +1,437 @@
+//! The hardware file: parsed and checked without opening anything (the format is in the crate documentation).
+
+use std::path::{Path, PathBuf};
+
+use metaplate_core::rig::Wiring;
+use metaplate_daq::UsbSelector;
+use metaplate_ldv::{BAUD_RATE, PortSelector};
+use serde::Deserialize;
+use serde::de::DeserializeOwned;
+
+use crate::backends::{self, Capability};
+
+/// Why a hardware file cannot be used as it is, or its rig cannot be opened.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum HardwareError {
+    /// The file cannot be read or parsed, or a value in it is missing, unknown or out of range.
+    #[error("hardware file {}: {key}: {reason}", path.display())]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// The key in error (`daq.backend`, `wiring`), or `(file)` for the file as a whole.
+        key: String,
+        /// What is wrong (with the TOML parser's line and column when it has them).
+        reason: String,
+    },
+    /// The file names a backend this build of metaplate does not have (a cargo feature off, or an operating system
+    /// without it).
+    #[error("hardware file {}: {key} = \"{backend}\": {reason}", path.display())]
+    NotInThisBuild {
+        /// The file.
+        path: PathBuf,
+        /// The key naming the backend (`audio.backend`).
+        key: String,
+        /// The backend named.
+        backend: &'static str,
+        /// Why it is missing and how to get it.
+        reason: String,
+    },
+    /// An instrument could not be opened.
+    #[error("cannot open the {device} `{name}` ({backend}): {detail}")]
+    Device {
+        /// Which instrument (`LDV`, `DAQ`, `audio interface`, `keypad`).
+        device: &'static str,
+        /// Its backend.
+        backend: &'static str,
+        /// How the file names it (port, USB ids, device name).
+        name: String,
+        /// The driver's error.
+        detail: String,
+    },
+}
+
+/// `[ldv]`: the scanning vibrometer's controller.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LdvSection {
+    /// `backend = "serial"`: on an RS-232 port.
+    Serial(SerialLdv),
+}
+
+/// `[ldv]` with `backend = "serial"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SerialLdv {
+    /// Serial port path (`/dev/serial/by-id/...`, `COM3`).
+    pub port: PathBuf,
+    /// Baud rate; must be the controller's ([`BAUD_RATE`]); optional.
+    #[serde(default = "default_baud")]
+    pub baud: u32,
+}
+
+fn default_baud() -> u32 {
+    BAUD_RATE
+}
+
+impl SerialLdv {
+    /// The port selector of this section.
+    pub fn selector(&self) -> PortSelector {
+        PortSelector::Path(self.port.clone())
+    }
+}
+
+/// `[daq]`: the DAQ.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DaqSection {
+    /// `backend = "usb-bulk"`: metaplate's USB bulk protocol.
+    UsbBulk(UsbBulkDaq),
+    /// `backend = "nidaqmx"`: an NI DAQ through NI-DAQmx.
+    Nidaqmx(NidaqmxDaq),
+}
+
+/// `[daq]` with `backend = "usb-bulk"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UsbBulkDaq {
+    /// `VID:PID:SERIAL`, ids in hex as `lsusb` prints them.
+    pub usb: String,
+    /// Interface with the bulk endpoints (default 0).
+    #[serde(default)]
+    pub interface: u8,
+    /// Bulk OUT endpoint address (default `0x01`).
+    #[serde(default = "default_endpoint_out")]
+    pub endpoint_out: u8,
+    /// Bulk IN endpoint address (default `0x81`).
+    #[serde(default = "default_endpoint_in")]
+    pub endpoint_in: u8,
+}
+
+fn default_endpoint_out() -> u8 {
+    0x01
+}
+
+fn default_endpoint_in() -> u8 {
+    0x81
+}
+
+impl UsbBulkDaq {
+    /// The USB selector of this section.
+    ///
+    /// # Errors
+    /// A sentence saying what is malformed in `usb` (the serial number is required: a lab may have two DAQs).
+    pub fn selector(&self) -> Result<UsbSelector, String> {
+        let ids = UsbIds::parse(&self.usb)?;
+        if ids.serial.is_none() {
+            return Err(format!("`{}` has no serial number: write VID:PID:SERIAL", self.usb));
+        }
+        Ok(UsbSelector {
+            vendor_id: ids.vendor_id,
+            product_id: ids.product_id,
+            serial: ids.serial,
+            interface: self.interface,
+            endpoint_out: self.endpoint_out,
+            endpoint_in: self.endpoint_in,
+        })
+    }
+}
+
+/// `[daq]` with `backend = "nidaqmx"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NidaqmxDaq {
+    /// NI device name as NI MAX shows it (`Dev1`).
+    pub device: String,
+    /// How long one block read waits, s (default 10; valid range: finite, > 0).
+    #[serde(default = "default_read_timeout_s")]
+    pub read_timeout_s: f64,
+}
+
+fn default_read_timeout_s() -> f64 {
+    10.0
+}
+
+/// `[audio]`: the multichannel audio interface.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AudioSection {
+    /// `backend = "alsa"`.
+    Alsa(AlsaAudio),
+}
+
+/// `[audio]` with `backend = "alsa"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlsaAudio {
+    /// ALSA PCM name (`aplay -L`).
+    pub device: String,
+    /// Frame rate, Hz (opened exactly, never resampled).
+    pub sample_rate_hz: f64,
+    /// Output channels to open.
+    pub channels: u32,
+}
+
+impl AudioSection {
+    /// Frame rate, Hz.
+    pub fn sample_rate_hz(&self) -> f64 {
+        match self {
+            AudioSection::Alsa(alsa) => alsa.sample_rate_hz,
+        }
+    }
+
+    /// Output channels.
+    pub fn channels(&self) -> u32 {
+        match self {
+            AudioSection::Alsa(alsa) => alsa.channels,
+        }
+    }
+}
+
+/// `[keypad]` (optional): the response keypad.
+#[derive(Debug, Clone, PartialEq)]
+pub enum KeypadSection {
+    /// `backend = "hidraw"`: a USB HID keyboard through hidapi.
+    Hidraw(HidrawKeypad),
+}
+
+/// `[keypad]` with `backend = "hidraw"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HidrawKeypad {
+    /// `VID:PID` or `VID:PID:SERIAL`, ids in hex.
+    pub usb: String,
+    /// Report ID in front of the boot reports, for a composite device that uses report IDs (omit otherwise).
+    #[serde(default)]
+    pub report_id: Option<u8>,
+}
+
+/// `[wiring]`: [`Wiring`] without what `[audio]` already says.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WiringSection {
+    /// Audio channel of each actuator.
+    pub actuator_channels: Vec<u32>,
+    /// Audio channel looped back into the DAQ.
+    pub loopback_channel: u32,
+    /// DAQ input of the velocity.
+    pub velocity_input: u8,
+    /// DAQ input of the loopback.
+    pub loopback_input: u8,
+    /// DAQ input range, +/- V.
+    pub daq_range_v: f64,
+    /// DAQ sample rate, Hz.
+    pub daq_sample_rate_hz: f64,
+    /// V at the DAQ per full-scale audio sample.
+    pub loopback_volts_per_full_scale: f64,
+}
+
+/// USB ids as a hardware file writes them: `VID:PID` or `VID:PID:SERIAL`, ids in hex.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UsbIds {
+    /// Vendor id.
+    pub vendor_id: u16,
+    /// Product id.
+    pub product_id: u16,
+    /// Serial number, if given (never empty).
+    pub serial: Option<String>,
+}
+
+impl UsbIds {
+    /// Parses `VID:PID[:SERIAL]`.
+    ///
+    /// # Errors
+    /// A sentence saying what is malformed.
+    pub fn parse(spec: &str) -> Result<Self, String> {
+        let mut parts = spec.splitn(3, ':');
+        let (Some(vid), Some(pid)) = (parts.next(), parts.next()) else {
+            return Err(format!("`{spec}` is not VID:PID or VID:PID:SERIAL"));
+        };
+        let hex = |s: &str| u16::from_str_radix(s, 16).map_err(|_| format!("`{s}` in `{spec}` is not a hex USB id"));
+        let serial = match parts.next() {
+            Some("") => return Err(format!("`{spec}` has an empty serial number")),
+            other => other.map(str::to_string),
+        };
+        Ok(Self { vendor_id: hex(vid)?, product_id: hex(pid)?, serial })
+    }
+}
+
+/// A hardware file, parsed and checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HardwareFile {
+    /// Where it was read from (named in errors).
+    pub path: PathBuf,
+    /// Scene describing the plate's geometry (built-in name or scene file).
+    pub plate: String,
+    /// The vibrometer's controller.
+    pub ldv: LdvSection,
+    /// The DAQ.
+    pub daq: DaqSection,
+    /// The audio interface.
+    pub audio: AudioSection,
+    /// The response keypad, if one is used.
+    pub keypad: Option<KeypadSection>,
+    /// The cabling.
+    pub wiring: WiringSection,
+}
+
+/// The file as TOML, before each instrument's section is read by its backend.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFile {
+    plate: String,
+    ldv: toml::Table,
+    daq: toml::Table,
+    audio: toml::Table,
+    keypad: Option<toml::Table>,
+    wiring: WiringSection,
+}
+
+impl HardwareFile {
+    /// Reads and checks the hardware file at `path` (see [`HardwareFile::parse`]).
+    ///
+    /// # Errors
+    /// [`HardwareError::File`] saying what is wrong and where.
+    pub fn load(path: &Path) -> Result<Self, HardwareError> {
+        let text = std::fs::read_to_string(path).map_err(|e| HardwareError::File {
+            path: path.to_path_buf(),
+            key: "(file)".into(),
+            reason: e.to_string(),
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and checks `text`, read from `path` (named in errors): TOML syntax, known keys, a known backend per
+    /// instrument with its keys, the baud rate, the USB ids and the wiring. Opens no device, and accepts backends
+    /// this build lacks ([`crate::open_rig`] refuses them).
+    ///
+    /// # Errors
+    /// [`HardwareError::File`] saying what is wrong and where.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, HardwareError> {
+        let bad = |key: &str, reason: String| HardwareError::File { path: path.to_path_buf(), key: key.into(), reason };
+        let raw: RawFile = toml::from_str(text).map_err(|e| bad("(file)", e.to_string().trim_end().to_string()))?;
+        let ldv = match section(path, Capability::Vibrometer, raw.ldv)? {
+            ("serial", rest) => LdvSection::Serial(keys(path, "ldv", rest)?),
+            (other, _) => return Err(unknown_backend(path, Capability::Vibrometer, other)),
+        };
+        let daq = match section(path, Capability::Daq, raw.daq)? {
+            ("usb-bulk", rest) => DaqSection::UsbBulk(keys(path, "daq", rest)?),
+            ("nidaqmx", rest) => DaqSection::Nidaqmx(keys(path, "daq", rest)?),
+            (other, _) => return Err(unknown_backend(path, Capability::Daq, other)),
+        };
+        let audio = match section(path, Capability::Audio, raw.audio)? {
+            ("alsa", rest) => AudioSection::Alsa(keys(path, "audio", rest)?),
+            (other, _) => return Err(unknown_backend(path, Capability::Audio, other)),
+        };
+        let keypad = match raw.keypad.map(|table| section(path, Capability::Keypad, table)).transpose()? {
+            None => None,
+            Some(("hidraw", rest)) => Some(KeypadSection::Hidraw(keys(path, "keypad", rest)?)),
+            Some((other, _)) => return Err(unknown_backend(path, Capability::Keypad, other)),
+        };
+        let file = Self { path: path.to_path_buf(), plate: raw.plate, ldv, daq, audio, keypad, wiring: raw.wiring };
+        let LdvSection::Serial(serial) = &file.ldv;
+        if serial.baud != BAUD_RATE {
+            return Err(bad("ldv.baud", format!("{}: the controller speaks {BAUD_RATE} baud 8N1 only", serial.baud)));
+        }
+        match &file.daq {
+            DaqSection::UsbBulk(usb) => {
+                usb.selector().map_err(|reason| bad("daq.usb", reason))?;
+            }
+            DaqSection::Nidaqmx(ni) => {
+                if ni.device.is_empty() || ni.device.contains('\0') {
+                    return Err(bad("daq.device", format!("{:?} is not an NI device name (`Dev1`)", ni.device)));
+                }
+                if !(ni.read_timeout_s.is_finite() && ni.read_timeout_s > 0.0) {
+                    return Err(bad("daq.read_timeout_s", format!("{} is not a positive time", ni.read_timeout_s)));
+                }
+            }
+        }
+        if let Some(KeypadSection::Hidraw(keypad)) = &file.keypad {
+            UsbIds::parse(&keypad.usb).map_err(|reason| bad("keypad.usb", reason))?;
+        }
+        file.wiring().validate().map_err(|reason| bad("wiring", reason))?;
+        Ok(file)
+    }
+
+    /// The wiring this file describes.
+    pub fn wiring(&self) -> Wiring {
+        let w = &self.wiring;
+        Wiring {
+            actuator_channels: w.actuator_channels.clone(),
+            loopback_channel: w.loopback_channel,
+            audio_channels: self.audio.channels(),
+            audio_sample_rate_hz: self.audio.sample_rate_hz(),
+            velocity_input: w.velocity_input,
+            loopback_input: w.loopback_input,
+            daq_range_v: w.daq_range_v,
+            daq_sample_rate_hz: w.daq_sample_rate_hz,
+            loopback_volts_per_full_scale: w.loopback_volts_per_full_scale,
+        }
+    }
+
+    /// The backend named for each instrument, in the order `ldv`, `daq`, `audio`, `keypad` (if any).
+    pub fn backends(&self) -> Vec<(Capability, &'static str)> {
+        let mut named = vec![
+            (
+                Capability::Vibrometer,
+                match self.ldv {
+                    LdvSection::Serial(_) => "serial",
+                },
+            ),
+            (
+                Capability::Daq,
+                match self.daq {
+                    DaqSection::UsbBulk(_) => "usb-bulk",
+                    DaqSection::Nidaqmx(_) => "nidaqmx",
+                },
+            ),
+            (
+                Capability::Audio,
+                match self.audio {
+                    AudioSection::Alsa(_) => "alsa",
+                },
+            ),
+        ];
+        if let Some(KeypadSection::Hidraw(_)) = self.keypad {
+            named.push((Capability::Keypad, "hidraw"));
+        }
+        named
+    }
+}
+
+/// Splits an instrument's section into its `backend` and the rest of its keys.
+fn section(
+    path: &Path,
+    capability: Capability,
+    mut table: toml::Table,
+) -> Result<(&'static str, toml::Table), HardwareError> {
+    let key = format!("{}.backend", capability.section());
+    let bad = |reason: String| HardwareError::File { path: path.to_path_buf(), key: key.clone(), reason };
+    let names = || backends::names(capability).join(", ");
+    let backend = match table.remove("backend") {
+        None => return Err(bad(format!("missing: name one of {}", names()))),
+        Some(toml::Value::String(name)) => name,
+        Some(other) => return Err(bad(format!("{other} is not a backend name: one of {}", names()))),
+    };
+    match backends::names(capability).into_iter().find(|known| *known == backend) {
+        Some(known) => Ok((known, table)),
+        None => Err(unknown_backend(path, capability, &backend)),
+    }
+}
+
+fn unknown_backend(path: &Path, capability: Capability, name: &str) -> HardwareError {
+    HardwareError::File {
+        path: path.to_path_buf(),
+        key: format!("{}.backend", capability.section()),
+        reason: format!(
+            "\"{name}\" is not a {} backend: one of {}",
+            capability.noun(),
+            backends::names(capability).join(", ")
+        ),
+    }
+}
+
+/// Reads a section's keys (all but `backend`) as `T`, refusing unknown ones.
+fn keys<T: DeserializeOwned>(path: &Path, section: &str, table: toml::Table) -> Result<T, HardwareError> {
+    toml::Value::Table(table).try_into().map_err(|e: toml::de::Error| HardwareError::File {
+        path: path.to_path_buf(),
+        key: section.into(),
+        reason: e.message().trim_end().to_string(),
+    })
+}

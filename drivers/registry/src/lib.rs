@@ -1,0 +1,63 @@
+//! The registry of metaplate's drivers, as probe-rs lists its probes: one table of backends per capability
+//! ([`backends::BACKENDS`]: name, what it needs, whether this build has it, what is connected), the hardware file
+//! that names one backend per instrument ([`HardwareFile`]), and opening the rig it names ([`open_rig`]).
+//!
+//! Each real backend is a cargo feature (`serial`, `usb-bulk`, `nidaqmx`, `alsa`, `hidraw`; all of them:
+//! `hardware`). A build without one still parses a file naming it and says, when asked to open it, that this
+//! build lacks it ([`HardwareError::NotInThisBuild`]); `alsa` and `hidraw` exist on Linux only.
+//!
+//! # The hardware file (TOML)
+//! The one description of the format (`cli/hardware.example.toml` is an example of it). Unknown keys are refused (a
+//! typo must not fall back to a default); every instrument's section names its `backend`.
+//! ```toml
+//! # The plate under test: a scene (built-in name or scene file) whose outline, supports, measurement grid and
+//! # actuator positions describe the real plate; its simulation settings are ignored.
+//! plate = "metamaterial"
+//!
+//! [ldv]                      # the scanning vibrometer's controller
+//! backend = "serial"         # RS-232 (the only LDV backend)
+//! port = "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A10K1234-if00-port0"
+//! baud = 115200              # optional; the controller speaks 115200 8N1 only, anything else is refused
+//!
+//! [daq]                      # the DAQ: either metaplate's USB bulk protocol ...
+//! backend = "usb-bulk"
+//! usb = "1209:0001:SN0001"   # VID:PID:SERIAL, ids in hex as lsusb prints them
+//! interface = 0              # optional (default 0): interface carrying the bulk endpoints
+//! endpoint_out = 0x01        # optional (default 0x01)
+//! endpoint_in = 0x81         # optional (default 0x81)
+//! # ... or an NI DAQ through NI-DAQmx:
+//! # backend = "nidaqmx"
+//! # device = "Dev1"          # the NI device name (NI MAX)
+//! # read_timeout_s = 10.0    # optional (default 10): longest wait for one block, s
+//!
+//! [audio]                    # the multichannel audio interface
+//! backend = "alsa"           # Linux only
+//! device = "hw:CARD=24Ao,DEV=0"
+//! sample_rate_hz = 48000.0
+//! channels = 10
+//!
+//! [keypad]                   # optional: the response keypad
+//! backend = "hidraw"         # Linux only
+//! usb = "046d:c31c"          # VID:PID or VID:PID:SERIAL, ids in hex
+//! report_id = 1              # optional: only for a composite device that prefixes its boot reports with an ID
+//!
+//! [wiring]                   # how it is cabled (checked by metaplate_core::rig::Wiring::validate)
+//! actuator_channels = [0, 1, 2, 3, 4, 5, 6, 7]   # audio channel of each actuator, in the plate's actuator order
+//! loopback_channel = 8       # audio channel cabled back into the DAQ
+//! velocity_input = 0         # DAQ input of the LDV's velocity output
+//! loopback_input = 1         # DAQ input of the loopback
+//! daq_range_v = 10.0         # DAQ input range, +/- V
+//! daq_sample_rate_hz = 24000.0
+//! loopback_volts_per_full_scale = 1.0   # V at the DAQ for a full-scale audio sample
+//! ```
+
+pub mod backends;
+mod file;
+mod open;
+
+pub use backends::{BACKENDS, Backend, Capability, Found, ListError};
+pub use file::{
+    AlsaAudio, AudioSection, DaqSection, HardwareError, HardwareFile, HidrawKeypad, KeypadSection, LdvSection,
+    NidaqmxDaq, SerialLdv, UsbBulkDaq, UsbIds, WiringSection,
+};
+pub use open::{OpenedRig, open_rig};

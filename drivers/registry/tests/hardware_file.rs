@@ -1,0 +1,120 @@
+//! The hardware file: every backend reachable from it, typed errors naming the file, the key and the reason, and the
+//! registry's tables.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may unwrap: a panic is the test failing
+
+use std::path::Path;
+
+use metaplate_drivers::{
+    BACKENDS, Capability, DaqSection, HardwareError, HardwareFile, KeypadSection, backends, open_rig,
+};
+
+const EXAMPLE: &str = include_str!("../../../cli/hardware.example.toml");
+
+fn parse(text: &str) -> Result<HardwareFile, HardwareError> {
+    HardwareFile::parse(text, Path::new("rig.toml"))
+}
+
+/// The example with its `[daq]` section replaced by `daq`.
+fn with_daq(daq: &str) -> String {
+    let start = EXAMPLE.find("[daq]").unwrap();
+    let end = EXAMPLE.find("# An NI DAQ").unwrap();
+    format!("{}{daq}\n{}", &EXAMPLE[..start], &EXAMPLE[end..])
+}
+
+#[test]
+fn the_example_names_a_backend_per_instrument() {
+    let file = parse(EXAMPLE).unwrap();
+    let named: Vec<_> = file.backends();
+    assert_eq!(named, [(Capability::Vibrometer, "serial"), (Capability::Daq, "usb-bulk"), (Capability::Audio, "alsa")]);
+    let DaqSection::UsbBulk(usb) = &file.daq else { panic!("{:?}", file.daq) };
+    let selector = usb.selector().unwrap();
+    assert_eq!((selector.vendor_id, selector.product_id, selector.serial.as_deref()), (0x1209, 0x0001, Some("SN0001")));
+    assert_eq!((selector.interface, selector.endpoint_out, selector.endpoint_in), (0, 0x01, 0x81));
+    assert!(file.keypad.is_none());
+}
+
+#[test]
+fn nidaqmx_and_the_keypad_are_selectable() {
+    let text = with_daq("[daq]\nbackend = \"nidaqmx\"\ndevice = \"Dev1\"\n")
+        + "\n[keypad]\nbackend = \"hidraw\"\nusb = \"046d:c31c\"\nreport_id = 1\n";
+    let file = parse(&text).unwrap();
+    let DaqSection::Nidaqmx(ni) = &file.daq else { panic!("{:?}", file.daq) };
+    assert_eq!((ni.device.as_str(), ni.read_timeout_s), ("Dev1", 10.0));
+    let Some(KeypadSection::Hidraw(keypad)) = &file.keypad else { panic!("{:?}", file.keypad) };
+    assert_eq!((keypad.usb.as_str(), keypad.report_id), ("046d:c31c", Some(1)));
+    let named: Vec<_> = file.backends().into_iter().map(|(_, name)| name).collect();
+    assert_eq!(named, ["serial", "nidaqmx", "alsa", "hidraw"]);
+}
+
+/// Each bad file is refused with the file, the key in error and a reason containing `expected`.
+#[test]
+fn bad_files_name_the_key_and_the_reason() {
+    let cases: Vec<(String, &str, &str)> = vec![
+        (EXAMPLE.replace("backend = \"usb-bulk\"", "backend = \"usb\""), "daq.backend", "one of usb-bulk, nidaqmx"),
+        (EXAMPLE.replace("backend = \"serial\"\n", ""), "ldv.backend", "missing"),
+        (EXAMPLE.replace("backend = \"alsa\"", "backend = 3"), "audio.backend", "not a backend name"),
+        (EXAMPLE.replace("baud = 115200", "baud = 9600"), "ldv.baud", "115200 baud"),
+        (EXAMPLE.replace("usb = \"1209:0001:SN0001\"", "usb = \"12g9:0001:SN0001\""), "daq.usb", "not a hex"),
+        (EXAMPLE.replace("usb = \"1209:0001:SN0001\"", "usb = \"1209:0001\""), "daq.usb", "no serial number"),
+        (EXAMPLE.replace("interface = 0", "interfce = 0"), "daq", "interfce"),
+        (with_daq("[daq]\nbackend = \"nidaqmx\"\ndevice = \"Dev1\"\nusb = \"1209:0001:SN1\"\n"), "daq", "usb"),
+        (
+            with_daq("[daq]\nbackend = \"nidaqmx\"\ndevice = \"Dev1\"\nread_timeout_s = -1.0\n"),
+            "daq.read_timeout_s",
+            "-1",
+        ),
+        (EXAMPLE.to_string() + "\n[keypad]\nbackend = \"hidraw\"\nusb = \"046d\"\n", "keypad.usb", "not VID:PID"),
+        (EXAMPLE.replace("loopback_channel = 8", "loopback_channel = 3"), "wiring", "used twice"),
+        (EXAMPLE.replace("plate = ", "plates = "), "(file)", "plates"),
+    ];
+    for (text, key, expected) in cases {
+        match parse(&text) {
+            Err(error @ HardwareError::File { .. }) => {
+                let HardwareError::File { path, key: got, reason } = &error else { unreachable!() };
+                assert_eq!((path.as_path(), got.as_str()), (Path::new("rig.toml"), key), "{error}");
+                assert!(reason.contains(expected), "{key}: {error}");
+                assert!(error.to_string().starts_with("hardware file rig.toml: "), "{error}");
+            }
+            other => panic!("{key}: {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn every_capability_has_a_table_and_every_backend_a_feature() {
+    for capability in Capability::ALL {
+        assert!(backends::of(capability).count() >= 1, "{capability:?}");
+    }
+    for backend in BACKENDS {
+        assert!(!backend.needs.is_empty() && !backend.feature.is_empty(), "{backend:?}");
+        assert_eq!(backend.available, backend.missing_reason().is_none(), "{backend:?}");
+        // Listing never fails for want of devices; backends that do not enumerate yet list nothing.
+        if !matches!(backend.name, "serial" | "usb-bulk") {
+            assert_eq!(backend.list(), Ok(Vec::new()), "{backend:?}");
+        }
+    }
+    assert_eq!(backends::find(Capability::Daq, "nidaqmx").map(|b| b.feature), Some("nidaqmx"));
+    assert!(backends::find(Capability::Daq, "serial").is_none());
+}
+
+/// Without a backend, a file naming it is refused before any device is opened, saying so.
+#[test]
+fn a_backend_missing_from_this_build_is_named() {
+    let file = parse(EXAMPLE).unwrap();
+    let missing: Vec<_> = file
+        .backends()
+        .into_iter()
+        .filter_map(|(capability, name)| backends::find(capability, name))
+        .filter(|b| !b.available)
+        .collect();
+    let Some(first) = missing.first() else {
+        return; // This build has every backend the example names: nothing to refuse.
+    };
+    match open_rig(&file) {
+        Err(error @ HardwareError::NotInThisBuild { .. }) => {
+            let message = error.to_string();
+            assert!(message.contains(first.name) && message.contains(&first.missing_reason().unwrap()), "{message}");
+        }
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+}
