@@ -27,7 +27,7 @@ const COMMIT_PAUSE_MS: u64 = 200;
 const KILLS: usize = 24;
 
 fn cache_dir() -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("metaplate-greens-cache");
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
