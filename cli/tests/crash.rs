@@ -1,7 +1,7 @@
-//! Crash safety of `metaplate scan`: kill -9 at 20 and more random instants (some inside a commit, made wide by the
-//! store's commit-pause test hook), resume each time until it finishes; the final dataset must equal an
-//! uninterrupted run with the same seed, point for point: same keys, bit-identical impulse responses, same statuses,
-//! no duplicates, no gaps.
+//! Crash safety of `metaplate scan` and `metaplate calibrate`: kill -9 at random instants (seeded), inside units
+//! (while a point or an actuator is measured or processed) and inside commits (made wide by the store's
+//! commit-pause test hook), resume each time until it finishes; the final dataset must equal an uninterrupted run
+//! with the same seed, row for row: same keys, bit-identical impulse responses, same statuses, no duplicates, no gaps.
 
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
@@ -27,18 +27,23 @@ const COMMIT_PAUSE_MS: u64 = 200;
 const KILLS: usize = 24;
 
 fn cache_dir() -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("metaplate-greens-cache");
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
-fn command(out: &Path, resume: bool) -> Command {
+/// The calibration under test: the metamaterial scene's 8 actuators, seed 5 (one Green's-function request with the
+/// scan's and `recipes.rs`'s, so the cache serves all of them).
+const CALIBRATE: &[&str] = &["calibrate", "--scene", "metamaterial", "--seed", "5"];
+const CALIBRATE_KILLS: usize = 6;
+
+fn command(args: &[&str], out: &Path, resume: bool, commit_pause_ms: u64) -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_metaplate"));
-    command.args(SCAN).arg("--out").arg(out).arg("--cache-dir").arg(cache_dir()).arg("--json");
+    command.args(args).arg("--out").arg(out).arg("--cache-dir").arg(cache_dir()).arg("--json");
     if resume {
         command.arg("--resume");
     }
-    command.env("METAPLATE_TEST_COMMIT_PAUSE_MS", COMMIT_PAUSE_MS.to_string()).env("RUST_BACKTRACE", "0");
+    command.env("METAPLATE_TEST_COMMIT_PAUSE_MS", commit_pause_ms.to_string()).env("RUST_BACKTRACE", "0");
     command
 }
 
@@ -58,8 +63,9 @@ fn unjournaled_batches(dir: &Path) -> usize {
 }
 
 /// Runs to completion, returning the wall time from the `started` event to the end and the points.
-fn uninterrupted(out: &Path) -> Duration {
-    let mut child = command(out, false).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+fn uninterrupted(args: &[&str], out: &Path, commit_pause_ms: u64) -> Duration {
+    let mut child =
+        command(args, out, false, commit_pause_ms).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
     let mut started = None;
     for line in BufReader::new(child.stdout.take().unwrap()).lines() {
         if line.unwrap().contains("\"started\"") {
@@ -75,20 +81,21 @@ fn uninterrupted(out: &Path) -> Duration {
 fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
     let tmp = tempfile::tempdir().unwrap();
     let reference_dir = tmp.path().join("reference");
-    let scan_time = uninterrupted(&reference_dir);
+    let scan_time = uninterrupted(SCAN, &reference_dir, COMMIT_PAUSE_MS);
     let reference = Dataset::open(&reference_dir).unwrap();
     let points = reference.points().len();
     eprintln!("uninterrupted: {points} points in {scan_time:?} after start-up");
 
     let dir = tmp.path().join("crashed");
     let mut rng = ChaCha8Rng::seed_from_u64(0x6b69_6c6c);
-    let (mut kills, mut inside_commit, mut runs) = (0, 0, 0);
+    let (mut kills, mut inside_commit, mut inside_point, mut runs) = (0, 0, 0, 0);
     let per_point = scan_time / points as u32;
     loop {
         runs += 1;
         assert!(runs < 200, "no end after {runs} runs");
         let resume = runs > 1;
-        let mut child = command(&dir, resume).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+        let mut child =
+            command(SCAN, &dir, resume, COMMIT_PAUSE_MS).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
         let spawned = Instant::now();
         // Lines from the child as they come, time-stamped on arrival.
         let (tx, rx) = mpsc::channel();
@@ -100,6 +107,7 @@ fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
                 }
             }
         });
+        let mut after_start = false;
         let kill_at = if kills >= KILLS {
             None
         } else if rng.random_bool(0.2) {
@@ -111,6 +119,7 @@ fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
             let marker = if rng.random_bool(0.25) { "\"committed\"" } else { "\"started\"" };
             let seen = rx.iter().find(|l| l.contains(marker) || l.contains("\"finished\""));
             let delay = per_point.mul_f64(rng.random_range(0.0..1.0));
+            after_start = true;
             seen.filter(|l| !l.contains("\"finished\"")).map(|_| Instant::now() + delay)
         };
         let mut killed = false;
@@ -128,21 +137,30 @@ fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
             kills += 1;
             if unjournaled_batches(&dir) > 0 {
                 inside_commit += 1;
+            } else if after_start {
+                // After `started` a point is always being measured or processed (the next one is recorded while
+                // the previous one is processed): the kill cut a unit.
+                inside_point += 1;
             }
             continue;
         }
         assert!(output.status.success(), "run {runs}: {}", String::from_utf8_lossy(&output.stderr));
         break;
     }
-    eprintln!("{kills} kills ({inside_commit} inside a commit) in {runs} runs");
+    eprintln!("{kills} kills ({inside_commit} inside a commit, {inside_point} inside a point) in {runs} runs");
     assert!(kills >= 20, "only {kills} kills landed");
+    assert!(inside_point >= KILLS / 2, "only {inside_point} of {kills} kills landed inside a point");
     assert!(inside_commit >= 1, "no kill landed between a batch file's rename and its journal line");
 
-    let crashed = Dataset::open(&dir).unwrap();
+    assert_same_rows(&reference, &Dataset::open(&dir).unwrap());
+}
+
+/// The crashed-and-resumed dataset equals the reference row for row, bit for bit.
+fn assert_same_rows(reference: &Dataset, crashed: &Dataset) {
     assert_eq!(crashed.len(), reference.len(), "no duplicates, no gaps");
     let keys = |d: &Dataset| d.rows().iter().map(|r| (r.point_index, r.actuator)).collect::<BTreeSet<_>>();
-    assert_eq!(keys(&crashed), keys(&reference));
-    assert_eq!(keys(&crashed).len(), crashed.len(), "each (point, actuator) once");
+    assert_eq!(keys(crashed), keys(reference));
+    assert_eq!(keys(crashed).len(), crashed.len(), "each (point, actuator) once");
     // Every row bit for bit; the differences are collected first, so that a failure says how far apart the two
     // runs are (relative error energy of the impulse response, dB) and where.
     let mut mismatches = Vec::new();
@@ -172,4 +190,58 @@ fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
         reference.len(),
         mismatches.join("\n")
     );
+}
+
+#[test]
+fn calibrate_killed_inside_actuators_then_resumed_equals_an_uninterrupted_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let reference_dir = tmp.path().join("reference");
+    let calibration_time = uninterrupted(CALIBRATE, &reference_dir, 0);
+    let reference = Dataset::open(&reference_dir).unwrap();
+    let units = reference.rows().iter().map(|r| r.actuator).collect::<BTreeSet<_>>().len();
+    let per_unit = calibration_time / units as u32;
+    eprintln!("uninterrupted: {units} actuators in {calibration_time:?} after start-up");
+
+    let dir = tmp.path().join("crashed");
+    let mut rng = ChaCha8Rng::seed_from_u64(0x6361_6c69);
+    let (mut kills, mut inside_unit, mut runs) = (0, 0, 0);
+    loop {
+        runs += 1;
+        assert!(runs < 50, "no end after {runs} runs");
+        let mut child =
+            command(CALIBRATE, &dir, runs > 1, 0).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+        let stdout = child.stdout.take().unwrap();
+        let mut lines = BufReader::new(stdout).lines().map(Result::unwrap);
+        let mut killed = false;
+        if kills < CALIBRATE_KILLS {
+            // Half-way-ish through an actuator: the first of this run (after `started`) or the second (after the
+            // first `committed`, so that the run makes progress), well clear of both ends.
+            let marker = if rng.random_bool(0.3) { "\"started\"" } else { "\"committed\"" };
+            let seen = lines.by_ref().find(|l| l.contains(marker) || l.contains("\"finished\""));
+            if seen.is_some_and(|l| !l.contains("\"finished\"")) {
+                std::thread::sleep(per_unit.mul_f64(rng.random_range(0.2..0.8)));
+                if child.try_wait().unwrap().is_none() {
+                    child.kill().unwrap();
+                    killed = true;
+                }
+            }
+        }
+        // What the run printed after the marker: a kill that lands before the next `committed` was inside an
+        // actuator's measurement, processing or commit.
+        let later: Vec<String> = lines.collect();
+        let output = child.wait_with_output().unwrap();
+        if killed && output.status.code().is_none() {
+            kills += 1;
+            if !later.iter().any(|l| l.contains("\"committed\"")) {
+                inside_unit += 1;
+            }
+            continue;
+        }
+        assert!(output.status.success(), "run {runs}: {}", String::from_utf8_lossy(&output.stderr));
+        break;
+    }
+    eprintln!("{kills} kills ({inside_unit} inside an actuator) in {runs} runs");
+    assert!(kills >= CALIBRATE_KILLS, "only {kills} kills landed");
+    assert!(inside_unit >= CALIBRATE_KILLS / 2, "only {inside_unit} of {kills} kills landed inside an actuator");
+    assert_same_rows(&reference, &Dataset::open(&dir).unwrap());
 }

@@ -12,7 +12,7 @@ fn the_demo_calibrates_scans_analyses_and_renders_both_plates() {
     let out = std::env::temp_dir().join(format!("metaplate-demo-test-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     // Green's functions cached under the target directory, so reruns skip the plate model.
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("demo-greens-cache");
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
     let run = Command::new(env!("CARGO_BIN_EXE_metaplate"))
         .args(["demo", "--out", out.to_str().unwrap(), "--grid", "7x4", "--seed", "3"])
         .args(["--cache-dir", cache.to_str().unwrap()])

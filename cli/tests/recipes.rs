@@ -25,7 +25,7 @@ const ACTUATORS: usize = 8;
 fn cache_dir() -> &'static Path {
     static CACHE: OnceLock<PathBuf> = OnceLock::new();
     CACHE.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("metaplate-greens-cache");
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
         std::fs::create_dir_all(&dir).unwrap();
         // Warm the scan's entry once, so that tests running in parallel do not all compute it.
         let warm = tempfile::tempdir().unwrap();

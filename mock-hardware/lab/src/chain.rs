@@ -95,9 +95,6 @@ struct Scheduled {
     sounding_s: f64,
     /// Rendered for the DAQ acquisition `run` (its id): first DAQ sample index, velocity (m/s), loopback (V).
     rendered: Option<Rendered>,
-    /// Plate velocity on the half-rate audio grid, m/s, once computed (an acquisition that starts during the
-    /// ring-down of this playback resamples it again without recomputing it).
-    grid_velocity: Option<Arc<Vec<f64>>>,
 }
 
 #[derive(Debug)]
@@ -233,7 +230,6 @@ impl LabState {
             dropout_s,
             sounding_s: sounding_frames as f64 / playback.frame_rate_hz,
             rendered: None,
-            grid_velocity: None,
         });
     }
 
@@ -291,17 +287,9 @@ impl LabState {
         if let Some(point_k) = point_k
             && !effect.forces.is_empty()
         {
-            let grid = match &self.playbacks[k].grid_velocity {
-                Some(grid) => Arc::clone(grid),
-                None => {
-                    self.velocity_on_grid(&effect, point_k)?;
-                    let grid = Arc::new(self.time.clone());
-                    self.playbacks[k].grid_velocity = Some(Arc::clone(&grid));
-                    grid
-                }
-            };
+            self.velocity_on_grid(&effect, point_k)?;
             let interp = Interpolator::for_band(self.params.band_hi_hz, grid_hz);
-            interp.resample_into(&grid, pos0, step, &mut velocity_m_s)?;
+            interp.resample_into(&self.time, pos0, step, &mut velocity_m_s)?;
         }
         let mut loopback_v = vec![0.0; len];
         if !effect.loopback_v.is_empty() {
@@ -342,7 +330,12 @@ impl LabState {
         self.playbacks.retain(|s| s.playback.end_s() + tail_s >= t_first);
         for k in 0..self.playbacks.len() {
             let fresh = self.playbacks[k].rendered.as_ref().is_some_and(|r| r.run == run.id);
-            if !fresh && self.playbacks[k].playback.start_s - 0.01 <= t_end {
+            // Only the playbacks submitted during this acquisition: the ring-down of an earlier one (the previous
+            // unit's last sweep, still up to 1e-4 of peak when the next acquisition starts) is not carried over, so
+            // that a measurement is the same whether or not the session measured something just before it (a
+            // resumed run starts on a plate at rest). Recipes record each playback whole, ring-down included.
+            let own = self.playbacks[k].playback.start_s >= run.t0_s;
+            if !fresh && own && self.playbacks[k].playback.start_s - 0.01 <= t_end {
                 self.render(k, run, fd_hz)?;
             }
         }
@@ -385,7 +378,7 @@ impl LabState {
             .of_kind(FaultKind::LdvDropout)
             .map(|f| (f.at_s, f.at_s + f.duration_s.max(1.0 / fd_hz)))
             .collect();
-        dropouts.extend(self.playbacks.iter().filter_map(|s| s.dropout_s));
+        dropouts.extend(self.playbacks.iter().filter(|s| s.playback.start_s >= run.t0_s).filter_map(|s| s.dropout_s));
         let (t_lo, t_hi) = (time_of(0), time_of(out.len()));
         for (a, b) in dropouts.into_iter().filter(|&(a, b)| b >= t_lo && a <= t_hi) {
             let i0 = (((a - t_lo) * fd_hz).ceil().max(0.0) as usize).min(out.len());

@@ -66,6 +66,10 @@
 //!
 //! # Simplifications
 //! - The beam is read once per playback (at submit): moving it during a playback does not change that playback.
+//! - A DAQ acquisition records only the playbacks submitted during it: the ring-down of an earlier playback (the
+//!   previous unit's last sweep) is not carried into the next acquisition, and a random dropout's low `SIG?`
+//!   reading ends when the beam moves. So what a measurement yields depends on (scene, seed, what is played where)
+//!   alone, never on what the session measured before: a run resumed after a crash equals an uninterrupted one.
 //! - The Green's functions are sampled at the DAQ's nominal rate and applied on the audio clock's half-rate grid
 //!   (a frequency scaling of the plate by the audio clock's offset, 30 ppm: far below any modal bandwidth).
 //! - The loopback is ideally low-passed at 12 kHz (the real DAQ would alias content above; drive signals have none).

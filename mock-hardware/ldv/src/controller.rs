@@ -74,7 +74,9 @@ impl MockController {
         self.fault_latched = true;
     }
 
-    /// Makes the next `queries` `SIG?` queries report a dropout ([`DROPOUT_LEVEL_PERCENT`]).
+    /// Makes the next `queries` `SIG?` queries report a dropout ([`DROPOUT_LEVEL_PERCENT`]), until the beam moves:
+    /// a dropout is the speckle at one spot losing lock, and a new spot is tracked afresh (so a dropout at the end
+    /// of one unit does not make the next unit's aim nudge, which a resumed run would not do).
     pub fn start_dropout(&mut self, queries: u32) {
         self.dropout_queries_left = queries;
     }
@@ -142,10 +144,12 @@ impl MockController {
                 self.require_calibration()?;
                 self.angles = angles_of(point).map_err(|e| (e.error_code(), e.to_string()))?;
                 self.position = point;
+                self.dropout_queries_left = 0;
                 Reply::Ok
             }
             Command::MoveToAngles(angles) => {
                 self.angles = angles;
+                self.dropout_queries_left = 0;
                 // Beyond the plate frame's 0.5 m the position is clamped; POS? is only meaningful on the plate.
                 self.position = point_of(angles);
                 Reply::Ok

@@ -28,7 +28,7 @@ pub fn lab_and_plan(scene: &Scene, nx: usize, ny: usize) -> (MockLab, ScanPlan) 
     let grid_len = scene.grid.len();
     let mut points = plan.points.clone();
     points.extend((0..scene.actuators.len()).map(|k| grid_len + k));
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("recipes-greens");
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
     std::fs::create_dir_all(&cache).unwrap();
     let options = LabOptions { points: Some(points), cache_dir: Some(cache), ..LabOptions::default() };
     (MockLab::new(scene, &options).unwrap(), plan)

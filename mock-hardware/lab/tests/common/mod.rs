@@ -37,7 +37,7 @@ pub fn lab(scene: &Scene, seed: Option<u64>) -> MockLab {
 
 /// As [`lab`], preparing `points` (grid indices, or `grid.len() + k` for actuator k's driving point).
 pub fn lab_with_points(scene: &Scene, seed: Option<u64>, points: Vec<usize>) -> MockLab {
-    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("lab-greens");
+    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
     std::fs::create_dir_all(&cache).unwrap();
     let options = LabOptions {
         seed,
