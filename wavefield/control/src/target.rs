@@ -17,7 +17,7 @@ use crate::error::ControlError;
 use crate::propagation::PropagationMatrices;
 
 /// Stream of a noise target's generator (see [`SplitMix64::new`]).
-const NOISE_STREAM: u64 = 0x6e6f_6973_65; // "noise"
+const NOISE_STREAM: u64 = 0x006e_6f69_7365; // "noise"
 
 /// Default width of the raised-cosine skirts that taper a target inside the band edges, Hz.
 pub const DEFAULT_SKIRT_HZ: f64 = 25.0;

@@ -37,6 +37,6 @@ pub fn synthetic_meta(recipe: &str, points: usize, actuators: u16, ir_len: usize
 /// Decaying noise-like responses of `len` samples, one per call: incompressible like real measurements (a smooth
 /// signal would flatter the encoder).
 pub fn noise_responses() -> impl FnMut(usize) -> Vec<f32> {
-    let mut rng = SplitMix64::new(1, 0x6265_6e63_68); // "bench"
+    let mut rng = SplitMix64::new(1, 0x0062_656e_6368); // "bench"
     move |len| (0..len).map(|i| (rng.uniform() as f32 - 0.5) * (-(i as f32) / len as f32 * 6.0).exp()).collect()
 }
