@@ -22,18 +22,21 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 use indicatif::ProgressBar;
+use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
+use metaplate_dsp::accuracy::ERROR_BAND_HZ;
 use metaplate_dsp::kirkeby::KirkebyFilter;
-use metaplate_lab::{ERROR_BAND_HZ, LabOptions, MockLab};
+use metaplate_lab::{LabOptions, MockLab};
 use metaplate_plate::ModelOptions;
 use metaplate_recipes::calibrate::ActuatorCalibration;
 use metaplate_recipes::{
     Calibration, CalibrationConfig, Event, Observer, Output, RunControl, ScanConfig, ScanPlan, ScanProtocol,
     ScanSummary, calibrate, scan,
 };
-use metaplate_store::{Dataset, SceneId};
+use metaplate_store::Dataset;
 use serde_json::{Value, json};
 
+use crate::cache::CacheArgs;
 use crate::focus::{PixelSpec, RenderOptions, render};
 use crate::{analyze, progress, simulate, wav};
 
@@ -49,9 +52,8 @@ pub struct DemoArgs {
     /// Seed of the simulated lab (noise, speckle, actuator spread) and of the recipes' choices.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Cache of the plates' Green's functions (created when missing): a rerun skips the plate model.
-    #[arg(long)]
-    cache_dir: Option<PathBuf>,
+    #[command(flatten)]
+    cache: CacheArgs,
     /// Scan grid NXxNY (a subset of the plate's grid), for tests.
     #[arg(long, hide = true, conflicts_with = "full")]
     grid: Option<String>,
@@ -79,7 +81,8 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let started = std::time::Instant::now();
     let subset = match (&args.grid, args.full) {
-        (Some(text), _) => Some(parse_grid(text)?),
+        // The wavelength estimate needs a two-dimensional field.
+        (Some(text), _) => Some(text.parse::<GridSubset>()?.at_least(2)?.into()),
         (None, true) => None,
         (None, false) => Some(DEFAULT_GRID),
     };
@@ -106,14 +109,6 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
 }
 
 /// `NXxNY` as two counts.
-fn parse_grid(text: &str) -> anyhow::Result<(usize, usize)> {
-    let parsed = text.split_once(['x', 'X']).and_then(|(a, b)| Some((a.trim().parse().ok()?, b.trim().parse().ok()?)));
-    match parsed {
-        Some((nx, ny)) if nx >= 2 && ny >= 2 => Ok((nx, ny)),
-        _ => bail!("--grid `{text}`: expected NXxNY with both at least 2"),
-    }
-}
-
 /// Everything the demo does on one plate, as its part of the summary.
 fn run_plate(
     scene: &Scene,
@@ -134,7 +129,7 @@ fn run_plate(
     points.extend((0..n_act).map(|k| scene.grid.len() + k));
     let options = LabOptions {
         seed: Some(args.seed),
-        cache_dir: args.cache_dir.clone(),
+        cache_dir: args.cache.dir(),
         points: Some(points),
         ..LabOptions::default()
     };
@@ -193,7 +188,7 @@ fn fresh_dir(dir: &Path) -> anyhow::Result<PathBuf> {
 fn output(dir: &Path, scene: &Scene) -> Output {
     Output {
         dir: dir.to_path_buf(),
-        scene: SceneId { name: scene.name.clone(), hash: format!("fnv1a64:{:016x}", scene.content_hash()) },
+        scene: scene.id(),
         software_version: env!("CARGO_PKG_VERSION").into(),
         resume: false,
         force: false,

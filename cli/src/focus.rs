@@ -133,11 +133,7 @@ fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
 /// (same name and content hash), else the grid's bounds widened by half a spacing.
 fn on_plate(dataset: &Dataset) -> impl Fn(f64, f64) -> bool {
     let meta = &dataset.manifest().meta;
-    let scene = Scene::builtin(&meta.scene.name).ok().filter(|s| {
-        // `simulate` writes the bare hex hash, the recipes prefix it with its algorithm.
-        let hash = meta.scene.hash.strip_prefix("fnv1a64:").unwrap_or(&meta.scene.hash);
-        format!("{:016x}", s.content_hash()).eq_ignore_ascii_case(hash)
-    });
+    let scene = Scene::builtin(&meta.scene.name).ok().filter(|s| s.id() == meta.scene);
     let grid = meta.grid;
     move |x_m, y_m| match &scene {
         Some(scene) => scene.plate.outline.contains(x_m, y_m),

@@ -5,6 +5,7 @@
 use clap::{Parser, Subcommand};
 
 mod analyze;
+mod cache;
 mod calibrate;
 mod deconvolve;
 mod demo;

@@ -5,11 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
+use metaplate_core::grid::GridSubset;
 use metaplate_recipes::{Calibration, RunControl, ScanConfig, ScanPlan, ScanProtocol, scan};
 
 use crate::rig::{self, Plate};
 use crate::run::{self, Reporter, RunArgs};
-use crate::simulate::parse_grid;
 
 /// Which inverse filters drive the actuators: exactly one of `--calibration` and `--uncalibrated`.
 #[derive(Args, Debug)]
@@ -38,8 +38,8 @@ pub struct ScanArgs {
     pub drive: Drive,
     /// Measure an evenly spread NXxNY subset of the scene's grid (for example 7x5); default: every measurable
     /// point.
-    #[arg(long, value_parser = parse_grid)]
-    pub grid: Option<(usize, usize)>,
+    #[arg(long)]
+    pub grid: Option<GridSubset>,
     /// Excitation protocol: `paper` (3 s linear sweep 62 to 625 Hz, 5 repetitions), `quick` (1 s, 2 repetitions),
     /// or another protocol the recipes know.
     #[arg(long, default_value = "paper")]
@@ -96,6 +96,6 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
 }
 
 /// The scan plan over `plate`'s grid and mask, on the `subset` if given.
-fn plan(plate: &Plate, subset: Option<(usize, usize)>) -> anyhow::Result<ScanPlan> {
-    Ok(ScanPlan::new(plate.scene.grid, &plate.scene.grid_mask(), subset)?)
+fn plan(plate: &Plate, subset: Option<GridSubset>) -> anyhow::Result<ScanPlan> {
+    Ok(ScanPlan::new(plate.scene.grid, &plate.scene.grid_mask(), subset.map(Into::into))?)
 }

@@ -70,6 +70,6 @@ fn summary(scene: &Scene) -> Vec<String> {
             g.spacing_m * 1e3
         ),
         format!("actuators: {}; supports: {}; resonators: {rods}", scene.actuators.len(), scene.supports.len()),
-        format!("content hash: {:016x}", scene.content_hash()),
+        format!("scene id: {}", scene.id().hash),
     ]
 }

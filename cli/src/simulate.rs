@@ -5,11 +5,13 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 use metaplate_analysis::dispersion::{DispersionOptions, SceneLayout, wavelengths_at};
+use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
 use metaplate_plate::{GreensFunctions, GreensRequest, ModelOptions, PlateModel};
-use metaplate_store::{DatasetMeta, DatasetWriter, IfExists, IrMeta, IrRecord, SceneId, Status};
+use metaplate_store::{DatasetMeta, DatasetWriter, IfExists, IrMeta, IrRecord, Status};
 use serde_json::{Value, json};
 
+use crate::cache::CacheArgs;
 use crate::progress;
 
 /// Subcommands of `metaplate simulate`.
@@ -69,8 +71,8 @@ pub struct GreensArgs {
     #[arg(long)]
     out: PathBuf,
     /// An evenly spread NXxNY subset of the scene's grid (for example 7x5); default: every measured point.
-    #[arg(long, value_parser = parse_grid)]
-    grid: Option<(usize, usize)>,
+    #[arg(long)]
+    grid: Option<GridSubset>,
     /// Impulse-response length, s.
     #[arg(long, default_value_t = 0.5)]
     duration_s: f64,
@@ -83,20 +85,8 @@ pub struct GreensArgs {
     /// Replace an existing dataset in --out.
     #[arg(long)]
     force: bool,
-    /// Directory for cached Green's functions (keyed by scene hash and request).
-    #[arg(long)]
-    cache_dir: Option<PathBuf>,
-}
-
-/// Parses `NXxNY`, e.g. `7x5`.
-pub fn parse_grid(text: &str) -> Result<(usize, usize), String> {
-    let (a, b) = text.split_once(['x', 'X']).ok_or_else(|| format!("expected NXxNY (e.g. 7x5), got `{text}`"))?;
-    let parse = |s: &str| s.trim().parse::<usize>().map_err(|_| format!("`{s}` in `{text}` is not a whole number"));
-    let (nx, ny) = (parse(a)?, parse(b)?);
-    if nx == 0 || ny == 0 {
-        return Err(format!("a grid needs at least one point each way, got `{text}`"));
-    }
-    Ok((nx, ny))
+    #[command(flatten)]
+    cache: CacheArgs,
 }
 
 /// Runs a simulate subcommand.
@@ -124,7 +114,7 @@ pub fn run(command: &SimulateCommand) -> anyhow::Result<()> {
                 sample_rate_hz: scene.daq.sample_rate_hz,
             };
             let summary =
-                write_ground_truth(&scene, &options, &request, &args.out, args.force, args.cache_dir.as_deref())?;
+                write_ground_truth(&scene, &options, &request, &args.out, args.force, args.cache.dir().as_deref())?;
             println!("{}", serde_json::to_string_pretty(&summary)?);
             Ok(())
         }
@@ -149,11 +139,11 @@ fn frequencies(from_hz: f64, to_hz: f64, step_hz: f64) -> anyhow::Result<Vec<f64
 }
 
 /// The scene's measured points, or the measured points of an evenly spread NX x NY subset of its grid.
-pub fn select_points(scene: &Scene, grid: Option<(usize, usize)>) -> anyhow::Result<Vec<usize>> {
+pub fn select_points(scene: &Scene, grid: Option<GridSubset>) -> anyhow::Result<Vec<usize>> {
     let mask = scene.grid_mask();
     let candidates = match grid {
         None => (0..scene.grid.len()).collect(),
-        Some((nx, ny)) => scene.grid.subset(nx, ny).with_context(|| format!("--grid {nx}x{ny}"))?,
+        Some(subset) => subset.indices(&scene.grid).with_context(|| format!("--grid {subset}"))?,
     };
     let points: Vec<usize> = candidates.into_iter().filter(|&p| mask[p]).collect();
     if points.is_empty() {
@@ -192,7 +182,7 @@ pub fn dispersion(scene: &Scene, options: &ModelOptions, freqs: &[f64]) -> anyho
     bar.finish_and_clear();
     Ok(json!({
         "scene": scene.name,
-        "scene_hash": format!("{:016x}", scene.content_hash()),
+        "scene_hash": scene.id().hash,
         "method": "k-space (the paper's): 2-D FFT of each actuator's field over the measured grid, half-maximum region \
                    around the peak, median over actuators; local: plate-equation (biharmonic Rayleigh quotient) estimate",
         "points": rows,
@@ -244,14 +234,8 @@ pub fn write_ground_truth(
         "units": "plate normal velocity per unit actuator force, m/s/N, as a discrete-time filter",
     });
     let Value::Object(config) = config else { bail!("internal: configuration is not a JSON object") };
-    let meta = DatasetMeta::new(
-        "simulate-greens",
-        config,
-        SceneId { name: scene.name.clone(), hash: format!("{:016x}", scene.content_hash()) },
-        env!("CARGO_PKG_VERSION"),
-        scene.seed,
-        scene.grid,
-    );
+    let meta =
+        DatasetMeta::new("simulate-greens", config, scene.id(), env!("CARGO_PKG_VERSION"), scene.seed, scene.grid);
     let if_exists = if force { IfExists::Replace } else { IfExists::Refuse };
     let mut writer = DatasetWriter::create(out, meta, if_exists)
         .with_context(|| format!("creating dataset {} (use --force to replace one)", out.display()))?;

@@ -18,12 +18,16 @@ use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_analysis::pixel::{PixelAreaOptions, pixel_area_map};
 use metaplate_control::PropagationMatrices;
+use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
-use metaplate_lab::{ERROR_BAND_HZ, LabOptions, MockLab};
+use metaplate_dsp::accuracy::ERROR_BAND_HZ;
+use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, scan};
 use metaplate_recipes::{Output, RunControl, Silent};
-use metaplate_store::{Dataset, SceneId};
+use metaplate_store::Dataset;
 use serde_json::{Value, json};
+
+use crate::cache::CacheArgs;
 
 /// Protocols measured by default.
 const DEFAULT_PROTOCOLS: &str =
@@ -48,9 +52,8 @@ pub struct TradeoffArgs {
     /// Seed of the lab and the scan.
     #[arg(long, default_value_t = 7)]
     seed: u64,
-    /// Where the scene's Green's functions are cached (default: a temporary cache for this run).
-    #[arg(long)]
-    cache_dir: Option<PathBuf>,
+    #[command(flatten)]
+    cache: CacheArgs,
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
@@ -73,7 +76,7 @@ struct Measured {
 
 pub fn run(args: &TradeoffArgs) -> anyhow::Result<()> {
     let scene = Scene::resolve(&args.scene).with_context(|| format!("loading scene {}", args.scene))?;
-    let (nx, ny) = parse_grid(&args.grid)?;
+    let GridSubset { nx, ny } = args.grid.parse()?;
     let mask = scene.grid_mask();
     let full_points = mask.iter().filter(|m| **m).count();
     let plan = ScanPlan::new(scene.grid, &mask, Some((nx, ny)))?;
@@ -84,13 +87,14 @@ pub fn run(args: &TradeoffArgs) -> anyhow::Result<()> {
     }
     // Each protocol needs a lab of its own (a lab hands out one rig); without a cache every one would recompute the
     // same Green's functions, so a temporary cache shares them.
-    let scratch_cache = match &args.cache_dir {
+    let cache_dir = args.cache.dir();
+    let scratch_cache = match &cache_dir {
         Some(_) => None,
         None => Some(tempfile_dir()?),
     };
     let options = LabOptions {
         seed: Some(args.seed),
-        cache_dir: args.cache_dir.clone().or_else(|| scratch_cache.clone()),
+        cache_dir: cache_dir.or_else(|| scratch_cache.clone()),
         points: Some(plan.points.clone()),
         ..LabOptions::default()
     };
@@ -131,11 +135,6 @@ pub fn run(args: &TradeoffArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn parse_grid(s: &str) -> anyhow::Result<(usize, usize)> {
-    let (a, b) = s.split_once('x').with_context(|| format!("--grid {s}: expected NXxNY"))?;
-    Ok((a.parse().context("--grid NX")?, b.parse().context("--grid NY")?))
-}
-
 /// Scans `plan` with `protocol` on `lab` into a temporary directory and measures the result.
 fn measure(
     lab: &MockLab,
@@ -148,7 +147,7 @@ fn measure(
     let dir = tempfile_dir()?;
     let out = Output {
         dir: dir.clone(),
-        scene: SceneId { name: scene.name.clone(), hash: format!("fnv1a64:{:016x}", scene.content_hash()) },
+        scene: scene.id(),
         software_version: env!("CARGO_PKG_VERSION").into(),
         resume: false,
         force: false,

@@ -101,7 +101,7 @@ fn calibration(dir: &Path) -> PathBuf {
     let mut rig = lab.rig().unwrap();
     let out = Output {
         dir: dir.join("calibration"),
-        scene: metaplate_store::SceneId { name: scene.name.clone(), hash: format!("{:016x}", scene.content_hash()) },
+        scene: scene.id(),
         software_version: "test".into(),
         resume: false,
         force: false,

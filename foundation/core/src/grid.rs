@@ -4,6 +4,9 @@
 //! `(origin_x_m + ix * spacing_m, origin_y_m + iy * spacing_m)` and has the flat index `iy * nx + ix` (row-major, rows
 //! along x). Whether a point is on the plate is the scene's business ([`crate::scene::Scene::grid_mask`]).
 
+use std::fmt;
+use std::str::FromStr;
+
 use serde::{Deserialize, Serialize};
 
 /// The largest grid accepted: 10^6 points (the paper's has 1225; a million already means weeks of scanning).
@@ -32,6 +35,87 @@ pub enum GridError {
         /// The grid's points along y.
         ny: usize,
     },
+    /// A grid-subset text (`NXxNY`) that could not be read, or asks for fewer points than its use needs.
+    #[error("grid subset `{text}`: {reason}")]
+    BadSubsetText {
+        /// The text as given.
+        text: String,
+        /// What was wrong and what is accepted.
+        reason: String,
+    },
+}
+
+/// An evenly spread `nx` x `ny` subset of a grid, as a command line writes it: `NXxNY` (for example `7x5`; `X` is
+/// accepted for `x`, spaces around the numbers are ignored). Both sides are whole numbers of at least 1; whether it
+/// fits a given grid is checked by [`GridSubset::indices`] ([`GridSpec::subset`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct GridSubset {
+    /// Points along x.
+    pub nx: usize,
+    /// Points along y.
+    pub ny: usize,
+}
+
+impl GridSubset {
+    /// The subset, if each side has at least `min_side` points (a use that needs a two-dimensional field, for
+    /// example a wavenumber estimate, asks for 2).
+    ///
+    /// # Errors
+    /// [`GridError::BadSubsetText`] when a side is smaller.
+    pub fn at_least(self, min_side: usize) -> Result<Self, GridError> {
+        if self.nx < min_side || self.ny < min_side {
+            return Err(GridError::BadSubsetText {
+                text: self.to_string(),
+                reason: format!("each side must be at least {min_side} here"),
+            });
+        }
+        Ok(self)
+    }
+
+    /// The subset's flat indices in `grid` ([`GridSpec::subset`]).
+    ///
+    /// # Errors
+    /// [`GridError::BadSubset`] when the subset is larger than the grid along a side.
+    pub fn indices(self, grid: &GridSpec) -> Result<Vec<usize>, GridError> {
+        grid.subset(self.nx, self.ny)
+    }
+}
+
+impl From<GridSubset> for (usize, usize) {
+    fn from(s: GridSubset) -> Self {
+        (s.nx, s.ny)
+    }
+}
+
+impl fmt::Display for GridSubset {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}x{}", self.nx, self.ny)
+    }
+}
+
+impl FromStr for GridSubset {
+    type Err = GridError;
+
+    fn from_str(text: &str) -> Result<Self, GridError> {
+        let bad = |reason: String| GridError::BadSubsetText { text: text.to_owned(), reason };
+        let Some((a, b)) = text.split_once(['x', 'X']) else {
+            return Err(bad("expected NXxNY, for example 7x5".to_owned()));
+        };
+        let side = |s: &str, axis: &str| -> Result<usize, GridError> {
+            let s = s.trim();
+            if s.is_empty() {
+                return Err(bad(format!(
+                    "the number of points along {axis} is missing (expected NXxNY, for example 7x5)"
+                )));
+            }
+            let n: usize = s.parse().map_err(|_| bad(format!("`{s}` (points along {axis}) is not a whole number")))?;
+            if n == 0 {
+                return Err(bad(format!("the number of points along {axis} must be at least 1")));
+            }
+            Ok(n)
+        };
+        Ok(Self { nx: side(a, "x")?, ny: side(b, "y")? })
+    }
 }
 
 /// A uniform rectangular grid of measurement points.
@@ -168,6 +252,48 @@ fn spread(n: usize, n_sub: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn grid_subset_reads_nx_by_ny() {
+        assert_eq!("7x5".parse(), Ok(GridSubset { nx: 7, ny: 5 }));
+        assert_eq!(" 7 X 5 ".parse(), Ok(GridSubset { nx: 7, ny: 5 }));
+        assert_eq!("1x1".parse(), Ok(GridSubset { nx: 1, ny: 1 }));
+        assert_eq!(GridSubset { nx: 7, ny: 5 }.to_string(), "7x5");
+        assert_eq!(<(usize, usize)>::from(GridSubset { nx: 7, ny: 5 }), (7, 5));
+    }
+
+    #[test]
+    fn grid_subset_refuses_bad_text_with_the_reason() {
+        let reason = |text: &str| match text.parse::<GridSubset>() {
+            Err(GridError::BadSubsetText { text: t, reason }) if t == text => reason,
+            other => panic!("`{text}`: {other:?}"),
+        };
+        assert!(reason("0x5").contains("along x must be at least 1"));
+        assert!(reason("5x0").contains("along y must be at least 1"));
+        assert!(reason("5x").contains("along y is missing"));
+        assert!(reason("x5").contains("along x is missing"));
+        assert!(reason("axb").contains("`a` (points along x) is not a whole number"));
+        assert!(reason("7x5x3").contains("`5x3`"));
+        assert!(reason("-1x5").contains("not a whole number"));
+        assert!(reason("75").contains("expected NXxNY"));
+        assert!(reason("").contains("expected NXxNY"));
+        assert!(reason("99999999999999999999999x1").contains("not a whole number"));
+    }
+
+    #[test]
+    fn grid_subset_checks_its_use_and_the_grid() {
+        let one: GridSubset = "1x1".parse().unwrap();
+        assert!(matches!(one.at_least(2), Err(GridError::BadSubsetText { .. })));
+        let two: GridSubset = "2x3".parse().unwrap();
+        assert_eq!(two.at_least(2), Ok(two));
+        let g = GridSpec::centred(7, 5, 0.01);
+        assert_eq!("7x5".parse::<GridSubset>().unwrap().indices(&g).unwrap().len(), 35);
+        assert_eq!(one.indices(&g).unwrap(), vec![g.index(3, 2)]);
+        assert!(matches!(
+            "8x5".parse::<GridSubset>().unwrap().indices(&g),
+            Err(GridError::BadSubset { nx_sub: 8, ny_sub: 5, nx: 7, ny: 5 })
+        ));
+    }
 
     #[test]
     fn centred_paper_grid() {

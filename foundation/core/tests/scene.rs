@@ -4,7 +4,9 @@
 
 use std::path::Path;
 
-use metaplate_core::scene::{FaultKind, Outline, ResonatorModel, ResonatorSpec, Scene, SceneError};
+use metaplate_core::scene::{
+    CANONICAL_FORM_VERSION, FaultKind, Outline, ResonatorModel, ResonatorSpec, SCENE_HASH_PREFIX, Scene, SceneError,
+};
 
 const METAMATERIAL: &str = include_str!("../scenes/metamaterial.toml");
 const RECT_FAULTS: &str = include_str!("scenes/rect_faults.toml");
@@ -459,4 +461,52 @@ fn serde_form_is_the_file_form() {
     let bad = s.to_toml_string().replacen("thickness_m = 0.002", "thickness_m = -0.002", 1);
     let err = toml::from_str::<Scene>(&bad).unwrap_err();
     assert!(err.to_string().contains("plate.thickness_m"), "{err}");
+}
+
+/// The built-in scene's identity, pinned: a change here means every dataset's scene id and every Green's-function
+/// cache key changes (resumes refuse, caches recompute). Change it only with [`CANONICAL_FORM_VERSION`].
+const METAMATERIAL_ID: &str = "fnv1a64:0c2e80eb5d46bd60";
+
+#[test]
+fn scene_id_is_pinned_and_spelled_once() {
+    let s = Scene::builtin("metamaterial").unwrap();
+    let id = s.id();
+    assert_eq!(id.name, "metamaterial");
+    assert_eq!(id.hash, METAMATERIAL_ID);
+    assert_eq!(id.hash, format!("{SCENE_HASH_PREFIX}{:016x}", s.content_hash()));
+    assert!(s.canonical_text().starts_with(&format!("metaplate-scene-canonical-v{CANONICAL_FORM_VERSION}\n")));
+}
+
+#[test]
+fn scene_id_depends_only_on_the_values() {
+    let s = Scene::builtin("metamaterial").unwrap();
+    let text = s.to_toml_string();
+    // The same scene written differently: keys reordered (top level and within a table), other whitespace, other
+    // float spellings (1e3 for 1000.0, 1.5e-3 for 0.0015, 3_200_000_000.0 for 3.2e9).
+    let original = include_str!("../scenes/metamaterial.toml");
+    let reformatted = original
+        .replacen("seed = 20240601\n", "", 1)
+        .replacen("name = \"metamaterial\"\n", "name   =   \"metamaterial\"\nseed=20240601\n", 1)
+        .replacen(
+            "youngs_modulus_pa = 3.2e9\npoisson_ratio = 0.37\n",
+            "poisson_ratio = 3.7e-1\n  youngs_modulus_pa = 3_200_000_000.0\n",
+            1,
+        )
+        .replacen("density_kg_m3 = 1180.0", "density_kg_m3 = 1.18e3", 1)
+        .replacen("thickness_m = 0.0015", "thickness_m = 1.5e-3", 1)
+        .replacen("nx = 49\nny = 25\n", "ny = 25\nnx = 49\n", 1);
+    for (old, new) in [("seed=", "seed = 20240601"), ("3.7e-1", "poisson"), ("1.18e3", "density"), ("1.5e-3", "thick")]
+    {
+        assert!(reformatted.contains(old), "the rewrite of `{new}` applied");
+    }
+    assert_ne!(reformatted, original);
+    let r = Scene::from_toml_str(&reformatted, "metamaterial.toml").unwrap();
+    assert_eq!(r, s);
+    assert_eq!(r.id(), s.id());
+    assert_eq!(r.canonical_text(), s.canonical_text());
+    // The resolved scene's own TOML (another layout again) reads back to the same identity.
+    assert_eq!(Scene::from_toml_str(&text, "resolved").unwrap().id(), s.id());
+    // And a value change is an identity change.
+    let thicker = original.replacen("thickness_m = 0.0015", "thickness_m = 0.0016", 1);
+    assert_ne!(Scene::from_toml_str(&thicker, "metamaterial.toml").unwrap().id(), s.id());
 }

@@ -220,9 +220,7 @@ fn check_repetitions<T: Sample>(repetitions: &[&[T]]) -> Result<usize, DspError>
 
 #[cfg(test)]
 mod tests {
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
-    use rand_distr::{Distribution, Normal};
+    use metaplate_core::rng::SplitMix64;
 
     use super::*;
 
@@ -247,12 +245,11 @@ mod tests {
     fn noise_and_snr_estimates_match_the_truth() {
         // 8 repetitions of 20 000 samples: the noise estimate has 7 * 20 000 degrees of freedom, a relative standard
         // deviation of sqrt(2 / 140 000) = 0.4 %; 3 % (0.13 dB) is over 7 sigma.
-        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut rng = SplitMix64::new(7, 0);
         let n = 20_000;
         let signal: Vec<f64> = (0..n).map(|i| (i as f64 * 0.01).sin()).collect();
         let sigma = 0.3;
-        let noise = Normal::new(0.0, sigma).unwrap();
-        let reps: Vec<Vec<f64>> = (0..8).map(|_| signal.iter().map(|s| s + noise.sample(&mut rng)).collect()).collect();
+        let reps: Vec<Vec<f64>> = (0..8).map(|_| signal.iter().map(|s| s + sigma * rng.normal()).collect()).collect();
         let refs: Vec<&[f64]> = reps.iter().map(Vec::as_slice).collect();
         let avg = average(&refs).unwrap();
         let true_noise = sigma * sigma * n as f64 / 8.0;
@@ -272,13 +269,13 @@ mod tests {
         // Two repetitions, the second with 4x the noise variance: weights 1 and 1/4. The residual-based estimate is
         // unbiased for the unit-weight variance; averaged over 200 trials of 1000 samples its relative standard
         // deviation is about sqrt(2 / 200 000) = 0.3 %; 3 % is 10 sigma.
-        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut rng = SplitMix64::new(3, 0);
         let n = 1000;
         let mut ratio_sum = 0.0;
         let trials = 200;
         for _ in 0..trials {
-            let a: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0) * 3f64.sqrt()).collect();
-            let b: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0) * 2.0 * 3f64.sqrt()).collect();
+            let a: Vec<f64> = (0..n).map(|_| (rng.uniform() * 2.0 - 1.0) * 3f64.sqrt()).collect();
+            let b: Vec<f64> = (0..n).map(|_| (rng.uniform() * 2.0 - 1.0) * 2.0 * 3f64.sqrt()).collect();
             let avg = weighted_average(&[&a, &b], &[1.0, 0.25]).unwrap();
             // Noise energy in the mean: n * 1 / W with unit variance for weight 1, W = 1.25.
             ratio_sum += avg.noise_energy.unwrap() / (n as f64 / 1.25);

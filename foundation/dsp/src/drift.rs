@@ -549,8 +549,7 @@ pub fn fit_clock(positions: &[f64], period_samples: usize) -> Result<ClockFit, D
 
 #[cfg(test)]
 mod tests {
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use metaplate_core::rng::SplitMix64;
 
     use super::*;
     use crate::sweep::{SweepKind, SweepSpec};
@@ -605,8 +604,8 @@ mod tests {
             assert!(est.coherence > 0.999_999, "{delay}: coherence {}", est.coherence);
         }
         // Noise has no coherence with the sweep: 1 / sqrt(in-band bins), about 0.05 here; 0.2 is a wide margin.
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let noise: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut rng = SplitMix64::new(1, 0);
+        let noise: Vec<f64> = (0..n).map(|_| rng.uniform() * 2.0 - 1.0).collect();
         let est = delay_from_spectra(&fft::forward(&noise, n).unwrap(), &template, n, Some(&gains)).unwrap();
         assert!(est.coherence < 0.2, "noise coherence {}", est.coherence);
         let zero = vec![Complex64::new(0.0, 0.0); template.len()];
@@ -688,8 +687,8 @@ mod tests {
             locate_repetitions(&vec![0.0; 20_000], &e, 2, None, FS),
             Err(DspError::InvalidParameter { name: "recording", .. })
         ));
-        let mut rng = ChaCha8Rng::seed_from_u64(2);
-        let noise: Vec<f64> = (0..20_000).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut rng = SplitMix64::new(2, 0);
+        let noise: Vec<f64> = (0..20_000).map(|_| rng.uniform() * 2.0 - 1.0).collect();
         assert!(matches!(
             locate_repetitions(&noise, &e, 2, Some(&band()), FS),
             Err(DspError::InvalidParameter { name: "recording", .. })

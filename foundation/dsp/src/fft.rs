@@ -124,13 +124,7 @@ pub fn forward(x: &[f64], n: usize) -> Result<Vec<Complex64>, DspError> {
 /// As [`forward`]; [`DspError::LengthMismatch`] when `spectrum.len() != n / 2 + 1`.
 pub fn forward_into(x: &[f64], n: usize, spectrum: &mut [Complex64]) -> Result<(), DspError> {
     check_len(n)?;
-    if spectrum.len() != bin_count(n) {
-        return Err(DspError::LengthMismatch {
-            what: "forward FFT bins against n / 2 + 1",
-            a: spectrum.len(),
-            b: bin_count(n),
-        });
-    }
+    check_bin_count("forward FFT bins against n / 2 + 1", spectrum.len(), n)?;
     check_finite("FFT input", x)?;
     let plan = PLANNER.with(|planner| planner.borrow_mut().plan_fft_forward(n));
     with_buffers(|Buffers { real, scratch, .. }| {
@@ -154,13 +148,7 @@ pub fn forward_into(x: &[f64], n: usize, spectrum: &mut [Complex64]) -> Result<(
 pub fn forward_destructive(x: &mut [f64], spectrum: &mut [Complex64]) -> Result<(), DspError> {
     let n = x.len();
     check_len(n)?;
-    if spectrum.len() != bin_count(n) {
-        return Err(DspError::LengthMismatch {
-            what: "forward FFT bins against n / 2 + 1",
-            a: spectrum.len(),
-            b: bin_count(n),
-        });
-    }
+    check_bin_count("forward FFT bins against n / 2 + 1", spectrum.len(), n)?;
     check_finite("FFT input", x)?;
     let plan = PLANNER.with(|planner| planner.borrow_mut().plan_fft_forward(n));
     with_buffers(|Buffers { scratch, .. }| {
@@ -168,6 +156,14 @@ pub fn forward_destructive(x: &mut [f64], spectrum: &mut [Complex64]) -> Result<
         plan.process_with_scratch(x, spectrum, scratch)
             .map_err(|e| DspError::InvalidParameter { name: "fft buffers", reason: e.to_string() })
     })
+}
+
+/// Refuses a spectrum of `bins` bins for an `n`-point real FFT (which has `n / 2 + 1`).
+fn check_bin_count(what: &'static str, bins: usize, n: usize) -> Result<(), DspError> {
+    if bins != bin_count(n) {
+        return Err(DspError::LengthMismatch { what, a: bins, b: bin_count(n) });
+    }
+    Ok(())
 }
 
 /// Inverse real FFT: `n / 2 + 1` bins back to `n` samples, normalised by `1 / n` so that
@@ -191,13 +187,7 @@ pub fn inverse(spectrum: &[Complex64], n: usize) -> Result<Vec<f64>, DspError> {
 /// As [`inverse`]; [`DspError::LengthMismatch`] when `output.len() != n`.
 pub fn inverse_into(spectrum: &[Complex64], n: usize, output: &mut [f64]) -> Result<(), DspError> {
     check_len(n)?;
-    if spectrum.len() != bin_count(n) {
-        return Err(DspError::LengthMismatch {
-            what: "inverse FFT bins against n / 2 + 1",
-            a: spectrum.len(),
-            b: bin_count(n),
-        });
-    }
+    check_bin_count("inverse FFT bins against n / 2 + 1", spectrum.len(), n)?;
     if output.len() != n {
         return Err(DspError::LengthMismatch { what: "inverse FFT output against n", a: output.len(), b: n });
     }

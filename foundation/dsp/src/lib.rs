@@ -8,6 +8,7 @@
 //! Every public routine checks its input: an empty signal, a NaN or infinity, or a parameter outside the routine's
 //! stated valid range is a [`DspError`], never a panic and never a NaN in the result.
 
+pub mod accuracy;
 pub mod average;
 pub mod band;
 pub mod conv;

@@ -2,6 +2,7 @@
 //! modes, harmonic separation, and every parameter at its extremes.
 #![allow(clippy::unwrap_used)] // tests may unwrap: a failure is the test failing
 
+use metaplate_core::rng::SplitMix64;
 use metaplate_dsp::DspError;
 use metaplate_dsp::band::BandLimit;
 use metaplate_dsp::conv::convolve;
@@ -12,21 +13,13 @@ use metaplate_dsp::fft;
 use metaplate_dsp::sweep::{SweepKind, SweepSpec};
 use num_complex::Complex64;
 use proptest::prelude::*;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 
 const FS: f64 = 24_000.0;
 const TAU: f64 = std::f64::consts::TAU;
 
 fn gaussian(len: usize, sigma: f64, seed: u64) -> Vec<f64> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..len)
-        .map(|_| {
-            let z: f64 = StandardNormal.sample(&mut rng);
-            sigma * z
-        })
-        .collect()
+    let mut rng = SplitMix64::new(seed, 0);
+    (0..len).map(|_| sigma * rng.normal()).collect()
 }
 
 /// White Gaussian samples under an exponential envelope `exp(-t / tau_s)`.

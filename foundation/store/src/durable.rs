@@ -186,6 +186,20 @@ pub(crate) fn sync_dir(dir: &Path) -> Result<(), StoreError> {
     Ok(())
 }
 
+/// Sorted entry names of `dir` (names that are not UTF-8 lossily converted).
+///
+/// # Errors
+/// [`StoreError::Io`] if the directory cannot be listed.
+pub(crate) fn entry_names(dir: &Path) -> Result<Vec<String>, StoreError> {
+    let mut names = Vec::new();
+    for entry in fs::read_dir(dir).map_err(StoreError::io("list directory", dir))? {
+        let entry = entry.map_err(StoreError::io("list directory", dir))?;
+        names.push(entry.file_name().to_string_lossy().into_owned());
+    }
+    names.sort_unstable();
+    Ok(names)
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
 mod tests {

@@ -236,7 +236,7 @@ pub enum StoreError {
         /// Polars' message.
         reason: String,
     },
-    /// A WAV file could not be written.
+    /// A WAV file could not be written or read.
     #[error("{path}: wav: {reason}")]
     Wav {
         /// The WAV file.

@@ -87,19 +87,7 @@ impl RowIndex {
                 });
             }
             let key = meta.key();
-            let first = match (self.rows.get(&key), in_batch.get(&key)) {
-                (Some(&global), _) => Some(self.describe(global)),
-                (None, Some(&earlier)) => Some(location(earlier)),
-                (None, None) => None,
-            };
-            if let Some(first) = first {
-                return Err(StoreError::Duplicate {
-                    point_index: key.0,
-                    actuator: key.1,
-                    first,
-                    location: location(row),
-                });
-            }
+            self.refuse_duplicate(key, row, &in_batch, &location)?;
             in_batch.insert(key, row);
             keys.push(key);
         }
@@ -109,6 +97,23 @@ impl RowIndex {
             }
             _ => Err(StoreError::EmptyBatch),
         }
+    }
+
+    /// Refuses `key` at `row` of a batch (described by `location`) when an accepted batch or an earlier row of this
+    /// one (`in_batch`: key to row) already holds it, naming the first holder.
+    fn refuse_duplicate(
+        &self,
+        key: (u32, u16),
+        row: usize,
+        in_batch: &HashMap<(u32, u16), usize>,
+        location: &dyn Fn(usize) -> String,
+    ) -> Result<(), StoreError> {
+        let first = match (self.rows.get(&key), in_batch.get(&key)) {
+            (Some(&global), _) => self.describe(global),
+            (None, Some(&earlier)) => location(earlier),
+            (None, None) => return Ok(()),
+        };
+        Err(StoreError::Duplicate { point_index: key.0, actuator: key.1, first, location: location(row) })
     }
 
     /// Takes a checked batch into the index; its rows get the next global row numbers, in order.
@@ -144,16 +149,7 @@ impl RowIndex {
         }
         let mut in_batch = HashMap::new();
         for (row, key) in keys.iter().enumerate() {
-            let first = self.rows.get(key).map(|&global| self.describe(global));
-            let first = first.or_else(|| in_batch.get(key).map(|&earlier| location(earlier)));
-            if let Some(first) = first {
-                return Err(StoreError::Duplicate {
-                    point_index: key.0,
-                    actuator: key.1,
-                    first,
-                    location: location(row),
-                });
-            }
+            self.refuse_duplicate(*key, row, &in_batch, &location)?;
             in_batch.insert(*key, row);
         }
         if keys.is_empty() {

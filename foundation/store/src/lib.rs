@@ -15,7 +15,7 @@
 //! a crash leaves either the previous state or the new one. [`DatasetWriter`] writes ([`DatasetWriter::create`],
 //! [`DatasetWriter::commit_batch`]) and continues after any stop ([`DatasetWriter::resume`]: verifies every committed
 //! file, quarantines what fails, never commits a key twice); [`Dataset`] reads back, verifying every checksum first;
-//! [`export_wav`] and [`write_wav_f32`] write 32-bit float WAV files; with the cargo feature `polars`,
+//! [`export_wav`] and [`write_wav_f32`] write 32-bit float WAV files, [`read_wav`] reads any WAV file; with the cargo feature `polars`,
 //! `Dataset::lazy` gives a polars `LazyFrame` over the committed files.
 
 mod checksum;
@@ -44,5 +44,5 @@ pub use reader::{Dataset, ReadOptions};
 pub use record::{IrMeta, IrRecord};
 pub use resume::{Quarantined, ResumeReport};
 pub use schema::Status;
-pub use wav::{export_wav, write_wav_f32};
+pub use wav::{export_wav, read_wav, write_wav_f32};
 pub use writer::{DatasetWriter, IfExists, QUARANTINE_DIR};

@@ -9,6 +9,7 @@ use std::io::Write;
 use std::path::Path;
 
 pub use metaplate_core::grid::GridSpec;
+pub use metaplate_core::scene::SceneId;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
@@ -26,15 +27,6 @@ pub const MANIFEST_FILE: &str = "manifest.json";
 /// `pyarrow.parquet.read_table(f"{run}/batches")`, `pandas.read_parquet(...)` and `polars.read_parquet(...)` read the
 /// whole dataset in one call (they refuse a directory that also holds `manifest.json`).
 pub const BATCH_DIR: &str = "batches";
-
-/// Identity of the plate: a scene file of the simulated lab, or a real plate.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct SceneId {
-    /// Human-readable name (the scene file's name, or the plate's label).
-    pub name: String,
-    /// Hash of the scene's content, as its producer writes it (for example `"sha256:<hex>"`).
-    pub hash: String,
-}
 
 /// What a dataset is: everything in the manifest that identifies the run, and that `config_hash` covers.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

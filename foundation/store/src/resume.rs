@@ -146,7 +146,7 @@ fn clean_directories(
     good: &[crate::manifest::BatchInfo],
     report: &mut ResumeReport,
 ) -> Result<(), StoreError> {
-    for name in entry_names(dir)? {
+    for name in durable::entry_names(dir)? {
         if name.starts_with('.') && name.ends_with(TEMP_SUFFIX) && is_own_root_file(&name) {
             let path = dir.join(&name);
             fs::remove_file(&path).map_err(StoreError::io("remove", &path))?;
@@ -155,7 +155,7 @@ fn clean_directories(
     let batch_dir = dir.join(BATCH_DIR);
     let committed: HashSet<&str> = good.iter().map(|b| b.file.as_str()).collect();
     let superseded: HashSet<&str> = live.superseded.iter().map(String::as_str).collect();
-    for name in entry_names(&batch_dir)? {
+    for name in durable::entry_names(&batch_dir)? {
         if committed.contains(name.as_str()) {
             continue;
         }
@@ -173,17 +173,6 @@ fn clean_directories(
     }
     durable::sync_dir(&batch_dir)?;
     durable::sync_dir(dir)
-}
-
-/// Sorted entry names of `dir`.
-fn entry_names(dir: &Path) -> Result<Vec<String>, StoreError> {
-    let mut names = Vec::new();
-    for entry in fs::read_dir(dir).map_err(StoreError::io("list directory", dir))? {
-        let entry = entry.map_err(StoreError::io("list directory", dir))?;
-        names.push(entry.file_name().to_string_lossy().into_owned());
-    }
-    names.sort_unstable();
-    Ok(names)
 }
 
 /// Moves `batches/<file>` (if present) into `quarantine/` under a name not yet taken there, and notes why.

@@ -65,6 +65,48 @@ where
     writer.finalize().map_err(hound_error)
 }
 
+/// Reads a WAV file (integer or float samples) into one f64 vector per channel, scaled to +/-1 full scale (an
+/// integer sample `v` of `b` bits is `v / 2^(b-1)`), and its sample rate in Hz.
+///
+/// # Errors
+/// [`StoreError::Io`] if the file cannot be opened; [`StoreError::Wav`] if it is not a WAV file hound reads, has no
+/// channels, or holds a non-finite float sample.
+pub fn read_wav(path: impl AsRef<Path>) -> Result<(f64, Vec<Vec<f64>>), StoreError> {
+    let path = path.as_ref();
+    let bad = |reason: String| StoreError::Wav { path: path.to_path_buf(), reason };
+    let hound_error = |e: hound::Error| match e {
+        hound::Error::IoError(source) => StoreError::from_io("read", path.to_path_buf(), source),
+        other => bad(other.to_string()),
+    };
+    let mut reader = hound::WavReader::open(path).map_err(hound_error)?;
+    let spec = reader.spec();
+    let n_channels = usize::from(spec.channels);
+    if n_channels == 0 {
+        return Err(bad("no channels".into()));
+    }
+    let interleaved: Vec<f64> = match spec.sample_format {
+        hound::SampleFormat::Float => {
+            reader.samples::<f32>().map(|s| s.map(f64::from)).collect::<Result<_, _>>().map_err(hound_error)?
+        }
+        hound::SampleFormat::Int => {
+            let full_scale = f64::from(1u32 << (spec.bits_per_sample.clamp(1, 32) - 1));
+            reader
+                .samples::<i32>()
+                .map(|s| s.map(|v| f64::from(v) / full_scale))
+                .collect::<Result<_, _>>()
+                .map_err(hound_error)?
+        }
+    };
+    if let Some(i) = interleaved.iter().position(|v| !v.is_finite()) {
+        return Err(bad(format!("channel {} sample {} is {}", i % n_channels, i / n_channels, interleaved[i])));
+    }
+    let mut channels = vec![Vec::with_capacity(interleaved.len() / n_channels); n_channels];
+    for (i, v) in interleaved.into_iter().enumerate() {
+        channels[i % n_channels].push(v);
+    }
+    Ok((f64::from(spec.sample_rate), channels))
+}
+
 /// Writes the impulse responses of grid point `point_index` as a WAV file with one channel per actuator of the
 /// dataset (in [`Dataset::actuators`] order), at the dataset's sample rate. Returns the actuators, channel by
 /// channel.

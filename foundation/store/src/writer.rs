@@ -224,17 +224,6 @@ fn test_commit_pause() {
     }
 }
 
-/// Sorted entry names of `dir`.
-fn entries(dir: &Path) -> Result<Vec<String>, StoreError> {
-    let mut names = Vec::new();
-    for entry in fs::read_dir(dir).map_err(StoreError::io("list directory", dir))? {
-        let entry = entry.map_err(StoreError::io("list directory", dir))?;
-        names.push(entry.file_name().to_string_lossy().into_owned());
-    }
-    names.sort_unstable();
-    Ok(names)
-}
-
 /// Makes `dir` an empty directory, or refuses.
 fn prepare_dir(dir: &Path, if_exists: IfExists) -> Result<(), StoreError> {
     if !dir.exists() {
@@ -244,7 +233,7 @@ fn prepare_dir(dir: &Path, if_exists: IfExists) -> Result<(), StoreError> {
         }
         return Ok(());
     }
-    let names = entries(dir)?;
+    let names = durable::entry_names(dir)?;
     let refuse = |entry: &str| Err(StoreError::NotEmpty { dir: dir.to_path_buf(), entry: entry.to_string() });
     match (if_exists, names.first()) {
         (_, None) => return Ok(()),
@@ -253,7 +242,7 @@ fn prepare_dir(dir: &Path, if_exists: IfExists) -> Result<(), StoreError> {
     }
     // Look at every entry before deleting any, so that a refusal deletes nothing.
     let batch_dir = dir.join(BATCH_DIR);
-    let batch_files = if batch_dir.is_dir() { entries(&batch_dir)? } else { Vec::new() };
+    let batch_files = if batch_dir.is_dir() { durable::entry_names(&batch_dir)? } else { Vec::new() };
     let quarantine_dir = dir.join(QUARANTINE_DIR);
     let own_dir = |n: &str| (n == BATCH_DIR || n == QUARANTINE_DIR) && dir.join(n).is_dir();
     if let Some(foreign) = names.iter().find(|n| !(is_own_root_file(n) || own_dir(n))) {

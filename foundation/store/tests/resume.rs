@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use common::{bits, meta, records};
 use metaplate_store::{
     BATCH_DIR, Dataset, DatasetWriter, IfExists, JOURNAL_FILE, QUARANTINE_DIR, StoreError, compact, export_wav,
-    write_wav_f32,
+    read_wav, write_wav_f32,
 };
 
 /// A dataset of three committed batches (points (0,0), (1,0), (2,0); actuators 0 and 1), left unfinished as a
@@ -345,6 +345,13 @@ fn drive_signals_write_as_float_wav_and_bad_input_is_refused() {
     // Written as f32: equal to each f64 rounded to f32.
     let expected: Vec<f32> = (0..3).flat_map(|i| drive.iter().map(move |c| c[i] as f32)).collect();
     assert_eq!(bits(&samples), bits(&expected));
+    // Read back: the same f32 values per channel, and the rate.
+    let (rate_hz, channels) = read_wav(&path).unwrap();
+    assert_eq!(rate_hz, 48_000.0);
+    for (read, written) in channels.iter().zip(&drive) {
+        let written_f32: Vec<f64> = written.iter().map(|&v| f64::from(v as f32)).collect();
+        assert_eq!(read, &written_f32);
+    }
     let bad = dir.path().join("bad.wav");
     for (channels, rate) in [
         (vec![vec![0.0f64; 3], vec![0.0; 2]], 48_000.0),
@@ -357,4 +364,29 @@ fn drive_signals_write_as_float_wav_and_bad_input_is_refused() {
         assert!(matches!(write_wav_f32(&bad, &channels, rate), Err(StoreError::Wav { .. })), "{channels:?} {rate}");
         assert!(!bad.exists());
     }
+    // Reading: a missing file and a file that is not WAV are errors, not panics.
+    assert!(matches!(read_wav(dir.path().join("missing.wav")), Err(StoreError::Io { .. })));
+    let junk = dir.path().join("junk.wav");
+    std::fs::write(&junk, b"not a wav file").unwrap();
+    assert!(matches!(read_wav(&junk), Err(StoreError::Wav { .. })));
+}
+
+#[test]
+fn integer_wav_reads_scaled_to_full_scale() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("int.wav");
+    let spec = hound::WavSpec {
+        channels: 2,
+        sample_rate: 24_000,
+        bits_per_sample: 16,
+        sample_format: hound::SampleFormat::Int,
+    };
+    let mut writer = hound::WavWriter::create(&path, spec).unwrap();
+    for v in [16_384i16, -32_768, 0, 8_192] {
+        writer.write_sample(v).unwrap();
+    }
+    writer.finalize().unwrap();
+    let (rate_hz, channels) = read_wav(&path).unwrap();
+    assert_eq!(rate_hz, 24_000.0);
+    assert_eq!(channels, vec![vec![0.5, 0.0], vec![-1.0, 0.25]]);
 }

@@ -1,6 +1,8 @@
-//! How close a measured response is to the lab's ground truth: the error measure the scan tests and
-//! `metaplate tradeoff` share.
+//! How close a measured response is to the lab's ground truth: [`metaplate_dsp::accuracy`]'s error measure against
+//! [`MockLab::true_response`], which the scan tests, `metaplate demo` and `metaplate tradeoff` share.
 
+pub use metaplate_dsp::accuracy::ERROR_BAND_HZ;
+use metaplate_dsp::accuracy::spectral_error_db;
 use metaplate_dsp::error::check_signal;
 use metaplate_dsp::fft;
 use metaplate_dsp::kirkeby::KirkebyFilter;
@@ -8,15 +10,11 @@ use num_complex::Complex64;
 
 use crate::{LabError, MockLab};
 
-/// The band compared by default, Hz: inside the paper's deconvolution band's flat part (62..625 Hz, with skirts
-/// outside it) and the sweep.
-pub const ERROR_BAND_HZ: (f64, f64) = (80.0, 600.0);
-
 impl MockLab {
     /// Relative error energy of a measured response `ir` (m/s per full scale, sampled at `sample_rate_hz`) against
     /// [`MockLab::true_response`] of (`point`, `actuator`), over the FFT bins of `ir` (its own length) within
     /// `band_hz`, dB: `10 log10(sum |H - T|^2 / sum |T|^2)`. -20 dB means the error is a tenth of the truth's
-    /// amplitude. With `compensation`, the truth is taken through that inverse filter with its modelling delay
+    /// amplitude ([`spectral_error_db`]). With `compensation`, the truth is taken through that inverse filter with its modelling delay
     /// removed: what a scan through the filter measures (the loopback carries the delay, and the division cancels
     /// it).
     ///
@@ -60,18 +58,11 @@ impl MockLab {
                 *t *= response[k] * advance;
             }
         }
-        let (mut err, mut energy) = (0.0, 0.0);
-        for (&k, t) in bins.iter().zip(&truth) {
-            err += (spectrum[k] - t).norm_sqr();
-            energy += t.norm_sqr();
-        }
-        if energy.is_nan() || energy <= 0.0 {
-            return Err(LabError::InvalidOption {
-                name: "band_hz",
-                reason: format!("{band_hz:?} Hz holds no bin where the truth is non-zero"),
-            });
-        }
-        Ok(10.0 * (err / energy).log10())
+        let measured: Vec<Complex64> = bins.iter().map(|&k| spectrum[k]).collect();
+        spectral_error_db(&measured, &truth).map_err(|e| LabError::InvalidOption {
+            name: "band_hz",
+            reason: format!("{band_hz:?} Hz holds no bin where the truth is non-zero and finite ({e})"),
+        })
     }
 }
 

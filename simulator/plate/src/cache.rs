@@ -3,13 +3,15 @@
 //! Where: only in a directory the caller passes (nothing is written otherwise), one file per key,
 //! `greens-<scene hash>-<request key>.bin` (both 16 hex digits). Format (little-endian): magic `MPGREEN1`, key u64,
 //! sample rate f64, ir_len u64, point count u64, actuator count u64, the point and actuator indices (u64 each), then
-//! the samples (f64). A file is written to a temporary name and renamed, so a reader never sees half a file; a file
+//! the samples (f64). A file is written to a temporary name of its writer's own, fsynced and renamed, so a reader
+//! never sees half a file and concurrent writers of one entry (processes or threads) do not mix; a file
 //! whose header does not match the request, is truncated, or holds a non-finite sample is ignored and recomputed.
 
 use metaplate_core::hash::fnv1a_64;
 use std::fs;
 use std::io::{ErrorKind, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use metaplate_core::scene::Scene;
 
@@ -118,9 +120,15 @@ fn parse(bytes: &[u8], key: u64, request: &GreensRequest) -> Option<GreensFuncti
     Some(GreensFunctions { sample_rate_hz, ir_len, points, actuators, data })
 }
 
-/// Writes a cache file atomically (temporary file, then rename).
+/// Distinguishes the temporary files of one process's concurrent writers (threads filling the same entry).
+static TEMP_SERIAL: AtomicU64 = AtomicU64::new(0);
+
+/// Writes a cache file atomically: a temporary name of its own (process id and a per-process serial, so that two
+/// processes or threads filling the same entry at once never write one file), fsync, then rename over the entry
+/// (atomic: a reader sees the old file, none, or the whole new one; the last writer wins with identical content).
 fn store(path: &Path, key: u64, g: &GreensFunctions) -> Result<(), PlateError> {
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+    let serial = TEMP_SERIAL.fetch_add(1, Ordering::Relaxed);
+    let tmp = path.with_extension(format!("tmp{}-{serial}", std::process::id()));
     let write = || -> std::io::Result<()> {
         let mut out = std::io::BufWriter::new(fs::File::create(&tmp)?);
         out.write_all(MAGIC)?;
@@ -176,6 +184,40 @@ mod tests {
         let err = ensure_dir(&file.join("cache")).unwrap_err();
         let text = err.to_string();
         assert!(text.contains("cannot create the cache directory") && text.contains("file/cache"), "{text}");
+        fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn writers_filling_one_entry_at_once_leave_a_whole_file() {
+        let root = scratch("race");
+        let request = GreensRequest {
+            points: vec![0, 3],
+            actuators: vec![1],
+            band_hz: (50.0, 600.0),
+            duration_s: 0.1,
+            sample_rate_hz: 24_000.0,
+        };
+        let ir_len = 2400;
+        let greens = GreensFunctions {
+            sample_rate_hz: request.sample_rate_hz,
+            ir_len,
+            points: request.points.clone(),
+            actuators: request.actuators.clone(),
+            data: (0..2 * ir_len).map(|i| i as f64 * 1e-3).collect(),
+        };
+        let path = cache_path(&root, 1, 2);
+        std::thread::scope(|s| {
+            for _ in 0..8 {
+                s.spawn(|| {
+                    for _ in 0..5 {
+                        store(&path, 2, &greens).unwrap();
+                    }
+                });
+            }
+        });
+        assert_eq!(load(&path, 2, &request).unwrap(), Some(greens));
+        // Only the entry is left: every temporary name was renamed away.
+        assert_eq!(fs::read_dir(&root).unwrap().count(), 1);
         fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -7,15 +7,17 @@
 
 use std::str::FromStr;
 
+use metaplate_core::rng::SplitMix64;
 use num_complex::Complex64;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 
 use metaplate_dsp::band::BandLimit;
 use metaplate_dsp::fft;
 
 use crate::error::ControlError;
 use crate::propagation::PropagationMatrices;
+
+/// Stream of a noise target's generator (see [`SplitMix64::new`]).
+const NOISE_STREAM: u64 = 0x006e_6f69_7365; // "noise"
 
 /// Default width of the raised-cosine skirts that taper a target inside the band edges, Hz.
 pub const DEFAULT_SKIRT_HZ: f64 = 25.0;
@@ -169,9 +171,9 @@ impl Waveform {
             Self::Noise { start_s, duration_s, seed } => {
                 check_time("start_s", *start_s)?;
                 positive("duration_s", *duration_s)?;
-                let mut rng = ChaCha8Rng::seed_from_u64(*seed);
+                let mut rng = SplitMix64::new(*seed, NOISE_STREAM);
                 for i in span(*start_s, *duration_s) {
-                    x[i] = rng.random::<f64>() * 2.0 - 1.0;
+                    x[i] = rng.uniform() * 2.0 - 1.0;
                 }
             }
             Self::Sine { freq_hz, start_s, duration_s } => {

@@ -10,6 +10,7 @@
 //! valid range is a [`SceneError`] naming the file, line and key path, never a panic.
 
 mod actuator;
+mod canonical;
 mod error;
 mod fault;
 mod file;
@@ -26,6 +27,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 pub use actuator::{ActuatorSpec, VoiceCoilSpec};
+pub use canonical::CANONICAL_FORM_VERSION;
 pub use error::SceneError;
 pub use fault::{FaultKind, FaultSpec};
 pub use instruments::{AudioSpec, DaqSpec, LdvSpec};
@@ -38,6 +40,19 @@ use crate::grid::GridSpec;
 use file::SceneFile;
 use locate::DocIndex;
 use validate::Problem;
+
+/// Prefix of the hash in a [`SceneId`] that [`Scene::id`] makes: the hash algorithm's name.
+pub const SCENE_HASH_PREFIX: &str = "fnv1a64:";
+
+/// Identity of the plate: a scene file of the simulated lab, or a real plate.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct SceneId {
+    /// Human-readable name (the scene file's name, or the plate's label).
+    pub name: String,
+    /// Hash of the scene's content, as its producer writes it: [`Scene::id`] writes `fnv1a64:<16 hex digits>`, a
+    /// real plate's producer whatever identifies it (for example `"sha256:<hex>"`).
+    pub hash: String,
+}
 
 /// The built-in scenes: name and TOML text.
 const BUILTINS: &[(&str, &str)] = &[
@@ -171,10 +186,23 @@ impl Scene {
             .unwrap_or_else(|e| format!("# scene `{}` cannot be written as TOML: {e}\n", self.name))
     }
 
-    /// A stable 64-bit hash of [`Scene::to_toml_string`] (FNV-1a): the same scene gives the same hash on every
-    /// machine and run, so it can key caches and datasets.
+    /// A stable 64-bit hash (FNV-1a) of the scene's canonical form ([`Scene::canonical_text`]): the same resolved
+    /// scene gives the same hash on every machine and run, whatever its file's layout, key order or float spelling,
+    /// and whatever version of the `toml` crate, so it can key caches and datasets.
     pub fn content_hash(&self) -> u64 {
-        crate::hash::fnv1a_64(self.to_toml_string().bytes())
+        crate::hash::fnv1a_64(self.canonical_text().bytes())
+    }
+
+    /// The canonical form the scene's identity hashes: one `path = value` line per leaf of the resolved scene, keys
+    /// sorted, floats as their IEEE-754 bits (see [`CANONICAL_FORM_VERSION`] for the exact rules).
+    pub fn canonical_text(&self) -> String {
+        canonical::canonical_text(self)
+    }
+
+    /// The scene's identity as datasets record it: its name and `fnv1a64:` followed by the 16 hex digits of
+    /// [`Scene::content_hash`]. The one place that spells a scene id: resumes and caches compare these.
+    pub fn id(&self) -> SceneId {
+        SceneId { name: self.name.clone(), hash: format!("{SCENE_HASH_PREFIX}{:016x}", self.content_hash()) }
     }
 
     /// Per grid point (by flat index): true when it can be measured, on the plate (edge included) and not on a

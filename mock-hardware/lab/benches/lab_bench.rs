@@ -1,6 +1,6 @@
 //! Wall time per (point, actuator) playback through the real drivers (run in release):
 //!
-//! `cargo run --release -p metaplate-lab --example lab_bench -- [points]`
+//! `cargo bench -p metaplate-lab --bench lab_bench -- [points]`
 //!
 //! The paper's protocol per (point, actuator): 5 linear sweeps of 3 s from 62 to 625 Hz back to back (15 s at
 //! 48 kHz), one actuator at a time, loopback on its channel, recorded at 24 kHz on 2 DAQ channels through the DAQ
@@ -18,7 +18,8 @@ use metaplate_lab::session::{configure, play_and_record};
 use metaplate_lab::{LabOptions, MockLab};
 
 fn main() {
-    let n_points: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(4);
+    // `cargo bench` passes `--bench`: not one of ours.
+    let n_points: usize = std::env::args().skip(1).find(|a| a != "--bench").and_then(|a| a.parse().ok()).unwrap_or(4);
     let scene = Scene::builtin("metamaterial").expect("scene");
     let measured = scene.measured_points();
     let points: Vec<usize> = (0..n_points).map(|i| measured[i * measured.len() / n_points]).collect();

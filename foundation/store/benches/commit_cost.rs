@@ -1,51 +1,27 @@
 //! Cost of one scan commit (one point: 8 rows of 12000-sample responses) and of resuming a full dataset; a by-hand
 //! benchmark, not a test.
 //!
-//! `cargo run --release -p metaplate-store --example commit_cost -- DIR [POINTS ACTUATORS IR_LEN]`
+//! `cargo bench -p metaplate-store --bench commit_cost -- DIR [POINTS ACTUATORS IR_LEN]`
 //!
 //! Defaults: the paper's scan, 1225 points x 8 actuators x 12000 samples, one commit per point. DIR must not exist
 //! or be empty; it is left behind.
 
+mod common;
+
 use std::error::Error;
 use std::time::Instant;
 
-use metaplate_store::{DatasetMeta, DatasetWriter, GridSpec, IfExists, IrMeta, IrRecord, SceneId, Status};
-
-fn arg(args: &[String], i: usize, default: usize) -> Result<usize, Box<dyn Error>> {
-    Ok(match args.get(i) {
-        Some(s) => s.parse()?,
-        None => default,
-    })
-}
+use metaplate_store::{DatasetWriter, IfExists, IrMeta, IrRecord, Status};
 
 fn main() -> Result<(), Box<dyn Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let dir = args.get(1).ok_or("usage: commit_cost DIR [POINTS ACTUATORS IR_LEN]")?;
-    let points = arg(&args, 2, 1225)?;
-    let actuators = u16::try_from(arg(&args, 3, 8)?)?;
-    let ir_len = arg(&args, 4, 12_000)?;
-    let grid = GridSpec::centred(49, points.div_ceil(49).max(1), 0.005);
-    let config = serde_json::json!({"points": points, "actuators": actuators, "ir_len": ir_len});
-    let meta = DatasetMeta::new(
-        "commit-cost",
-        config.as_object().cloned().unwrap_or_default(),
-        SceneId { name: "synthetic".into(), hash: "none".into() },
-        env!("CARGO_PKG_VERSION"),
-        1,
-        grid,
-    );
-    // Noise-like decaying responses: incompressible, like measurements.
-    let mut state = 0x2545_f491_4f6c_dd1d_u64;
-    let mut ir = |len: usize| -> Vec<f32> {
-        (0..len)
-            .map(|i| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * (-(i as f32) / len as f32 * 6.0).exp()
-            })
-            .collect()
-    };
+    let args = common::args();
+    let dir = args.first().ok_or("usage: commit_cost DIR [POINTS ACTUATORS IR_LEN]")?;
+    let points = common::arg(&args, 1, 1225)?;
+    let actuators = u16::try_from(common::arg(&args, 2, 8)?)?;
+    let ir_len = common::arg(&args, 3, 12_000)?;
+    let meta = common::synthetic_meta("commit-cost", points, actuators, ir_len);
+    let grid = meta.grid;
+    let mut ir = common::noise_responses();
     let mut writer = DatasetWriter::create(dir, meta.clone(), IfExists::Refuse)?;
     let mut costs_ms = Vec::with_capacity(points);
     for p in 0..points {

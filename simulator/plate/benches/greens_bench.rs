@@ -1,6 +1,6 @@
 //! Benchmark of the Green's-function computation (run in release; not a timed test):
 //!
-//! `cargo run --release -p metaplate-plate --example greens_bench -- [full|scaling|convergence]`
+//! `cargo bench -p metaplate-plate --bench greens_bench -- [full|scaling|convergence]`
 //!
 //! - `full`: the figure: all measured points x 8 actuators, 0.5 s at 24 kHz, band 50 to 700 Hz, built-in
 //!   metamaterial scene, 2 threads. Measure memory with `/usr/bin/time -v` (maximum resident set size).
@@ -42,7 +42,8 @@ fn run(scene: &Scene, refinement: usize, points: Vec<usize>, band_hz: (f64, f64)
 }
 
 fn main() {
-    let what = std::env::args().nth(1).unwrap_or_else(|| "full".into());
+    // `cargo bench` passes `--bench`: not one of ours.
+    let what = std::env::args().skip(1).find(|a| a != "--bench").unwrap_or_else(|| "full".into());
     let scene = Scene::builtin("metamaterial").expect("scene");
     let all = scene.measured_points();
     match what.as_str() {

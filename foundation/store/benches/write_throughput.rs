@@ -1,53 +1,27 @@
 //! Writes and re-reads a synthetic dataset and reports throughput and file size; a by-hand benchmark, not a test.
 //!
-//! `cargo run --release -p metaplate-store --example write_throughput -- DIR [POINTS ACTUATORS IR_LEN BATCH_POINTS]`
+//! `cargo bench -p metaplate-store --bench write_throughput -- DIR [POINTS ACTUATORS IR_LEN BATCH_POINTS]`
 //!
 //! Defaults: the paper's full dataset, 1225 points (49 x 25) x 8 actuators x 12000 f32 samples, one batch per 25
 //! points (a row of the grid). DIR must not exist or be empty; it is left behind for inspection (pyarrow, polars).
 
+mod common;
+
 use std::error::Error;
 use std::time::Instant;
 
-use metaplate_store::{Dataset, DatasetMeta, DatasetWriter, GridSpec, IfExists, IrMeta, IrRecord, SceneId, Status};
-
-fn arg(args: &[String], i: usize, default: usize) -> Result<usize, Box<dyn Error>> {
-    Ok(match args.get(i) {
-        Some(s) => s.parse()?,
-        None => default,
-    })
-}
+use metaplate_store::{Dataset, DatasetWriter, IfExists, IrMeta, IrRecord, Status};
 
 fn main() -> Result<(), Box<dyn Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let dir = args.get(1).ok_or("usage: write_throughput DIR [POINTS ACTUATORS IR_LEN BATCH_POINTS]")?;
-    let points = arg(&args, 2, 1225)?;
-    let actuators = u16::try_from(arg(&args, 3, 8)?)?;
-    let ir_len = arg(&args, 4, 12_000)?;
-    let batch_points = arg(&args, 5, 25)?.max(1);
-
-    let grid = GridSpec::centred(49, points.div_ceil(49).max(1), 0.005);
-    let config = serde_json::json!({"points": points, "actuators": actuators, "ir_len": ir_len});
-    let meta = DatasetMeta::new(
-        "write-throughput",
-        config.as_object().cloned().unwrap_or_default(),
-        SceneId { name: "synthetic".into(), hash: "none".into() },
-        env!("CARGO_PKG_VERSION"),
-        1,
-        grid,
-    );
-    // Decaying noise-like responses: incompressible like real measurements (a smooth signal would flatter Snappy).
-    let mut state = 0x2545_f491_4f6c_dd1d_u64;
-    let mut ir = |len: usize| -> Vec<f32> {
-        (0..len)
-            .map(|i| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                let noise = (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5;
-                noise * (-(i as f32) / len as f32 * 6.0).exp()
-            })
-            .collect()
-    };
+    let args = common::args();
+    let dir = args.first().ok_or("usage: write_throughput DIR [POINTS ACTUATORS IR_LEN BATCH_POINTS]")?;
+    let points = common::arg(&args, 1, 1225)?;
+    let actuators = u16::try_from(common::arg(&args, 2, 8)?)?;
+    let ir_len = common::arg(&args, 3, 12_000)?;
+    let batch_points = common::arg(&args, 4, 25)?.max(1);
+    let meta = common::synthetic_meta("write-throughput", points, actuators, ir_len);
+    let grid = meta.grid;
+    let mut ir = common::noise_responses();
 
     let mut writer = DatasetWriter::create(dir, meta, IfExists::Refuse)?;
     let (mut generate_s, mut write_s) = (0.0, 0.0);
