@@ -40,10 +40,9 @@ pub struct TradeoffArgs {
     /// Grid subset NXxNY (evenly spread points of the scene's grid; masked points are skipped).
     #[arg(long, default_value = "5x3")]
     grid: String,
-    /// Comma-separated protocols. Syntax: paper | quick | sequential:DxR | sequential-exp:DxR | hadamard:DxR |
-    /// interleaved:D | adaptive:DxR@SNR[/ROUNDS] (D sweep seconds >= 0.6, R periods per shot (>= 2 for
-    /// adaptive), SNR dB).
-    #[arg(long, default_value = DEFAULT_PROTOCOLS)]
+    /// Comma-separated excitation protocols (D sweep seconds >= 0.6, R periods per shot (>= 2 for adaptive), SNR
+    /// dB).
+    #[arg(long, default_value = DEFAULT_PROTOCOLS, long_help = crate::scan::protocol_help())]
     protocols: String,
     /// Seed of the lab and the scan.
     #[arg(long, default_value_t = 7)]
