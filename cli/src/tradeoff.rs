@@ -59,7 +59,7 @@ pub struct TradeoffArgs {
 }
 
 /// One protocol's measured trade.
-struct Measured {
+struct ProtocolTrade {
     name: String,
     time_per_point_s: f64,
     nominal_time_per_point_s: f64,
@@ -143,7 +143,7 @@ fn measure(
     protocol: ScanProtocol,
     seed: u64,
     full_points: usize,
-) -> anyhow::Result<Measured> {
+) -> anyhow::Result<ProtocolTrade> {
     let dir = tempfile_dir()?;
     let out = Output {
         dir: dir.clone(),
@@ -174,7 +174,7 @@ fn measure(
     let pixel = median_pixel_area(&dataset, plan);
     let time_per_point_s = summary.clock_s / plan.points.len() as f64;
     let _ = std::fs::remove_dir_all(&dir);
-    Ok(Measured {
+    Ok(ProtocolTrade {
         name,
         time_per_point_s,
         nominal_time_per_point_s: nominal,
@@ -204,7 +204,7 @@ fn tempfile_dir() -> anyhow::Result<PathBuf> {
     Ok(dir)
 }
 
-fn to_json(scene: &str, plan: &ScanPlan, full_points: usize, rows: &[Measured]) -> Value {
+fn to_json(scene: &str, plan: &ScanPlan, full_points: usize, rows: &[ProtocolTrade]) -> Value {
     let paper = rows.iter().find(|m| m.name == "paper");
     // The fastest protocol that reaches the paper's median error (within 0.5 dB: two draws of the same noise
     // differ by about that much on a small grid) in a fifth of its time per point or less.

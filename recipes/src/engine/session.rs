@@ -1,9 +1,10 @@
-//! One acquisition (DAQ recording while the audio interface plays), and recovery from device faults: reconnect,
+//! The rig's session for recipes: one acquisition ([`Rig::play_and_record`] at the session's velocity range), and
+//! recovery from device faults: reconnect,
 //! reopen, re-apply settings, poll while a device stays away.
 
 use metaplate_core::audio::{AudioConfig, AudioError};
-use metaplate_core::daq::{DaqChannel, DaqConfig, DaqError};
-use metaplate_core::rig::Rig;
+use metaplate_core::daq::{DaqConfig, DaqError};
+use metaplate_core::rig::{PlayRecordError, Rig};
 use metaplate_core::vibrometer::{VelocityScale, VibrometerError};
 
 use crate::error::RecipeError;
@@ -101,6 +102,16 @@ impl From<DaqError> for Fault {
     }
 }
 
+impl From<PlayRecordError> for Fault {
+    fn from(e: PlayRecordError) -> Self {
+        match e {
+            PlayRecordError::Daq(e) => e.into(),
+            PlayRecordError::Audio(e) => e.into(),
+            PlayRecordError::Channels { .. } => Fault::Spoiled(e.to_string()),
+        }
+    }
+}
+
 impl From<AudioError> for Fault {
     fn from(e: AudioError) -> Self {
         if e.suggests_reopen() {
@@ -147,16 +158,8 @@ impl<'a> Instruments<'a> {
         observer: &mut dyn Observer,
     ) -> Result<Self, RecipeError> {
         rig.wiring.validate().map_err(RecipeError::Config)?;
-        let w = &rig.wiring;
-        let daq_config = DaqConfig {
-            channels: vec![
-                DaqChannel { input: w.velocity_input, range_v: w.daq_range_v },
-                DaqChannel { input: w.loopback_input, range_v: w.daq_range_v },
-            ],
-            sample_rate_hz: w.daq_sample_rate_hz,
-            block_len_samples: BLOCK_LEN_SAMPLES,
-        };
-        let audio_config = AudioConfig { sample_rate_hz: w.audio_sample_rate_hz, channels: w.audio_channels };
+        let daq_config = rig.wiring.daq_config(BLOCK_LEN_SAMPLES);
+        let audio_config = rig.wiring.audio_config();
         let mut me = Self {
             rig,
             daq_config,
@@ -315,29 +318,15 @@ impl<'a> Instruments<'a> {
         record_samples: usize,
         scale: VelocityScale,
     ) -> Result<Acquisition, Fault> {
-        self.rig.daq.start()?;
-        if let Err(e) = self.rig.audio.start(buffers) {
-            let _ = self.rig.daq.stop();
-            return Err(e.into());
-        }
-        let mut velocity_v = Vec::with_capacity(record_samples + BLOCK_LEN_SAMPLES as usize);
-        let mut loopback_v = Vec::with_capacity(record_samples + BLOCK_LEN_SAMPLES as usize);
-        let (mut clipped, mut gap) = (false, false);
-        while velocity_v.len() < record_samples {
-            let block = self.rig.daq.read_block()?;
-            if block.volts.len() < 2 {
-                return Err(Fault::Spoiled(format!("DAQ block with {} channels, expected 2", block.volts.len())));
-            }
-            clipped |= block.integrity.clipped;
-            gap |= !block.integrity.is_contiguous();
-            velocity_v.extend_from_slice(&block.volts[0]);
-            loopback_v.extend_from_slice(&block.volts[1]);
-        }
-        velocity_v.truncate(record_samples);
-        loopback_v.truncate(record_samples);
-        let report = self.rig.audio.finish()?;
-        self.rig.daq.stop()?;
-        Ok(Acquisition { velocity_v, loopback_v, clipped, gap, underruns: report.underruns, scale })
+        let r = self.rig.play_and_record(buffers, record_samples)?;
+        Ok(Acquisition {
+            velocity_v: r.velocity_v,
+            loopback_v: r.loopback_v,
+            clipped: r.clipped,
+            gap: r.gap,
+            underruns: r.underruns,
+            scale,
+        })
     }
 
     /// Asks for a larger velocity range after clipping: ten times the current full scale, if the instrument has

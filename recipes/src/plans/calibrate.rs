@@ -82,15 +82,18 @@ impl Default for CalibrationConfig {
     /// [`KirkebyConfig::calibration`], flat within +/-1 dB over 62..625 Hz, 3 attempts, 0.1 m/s range.
     fn default() -> Self {
         let deconv = DeconvConfig::calibration();
+        let kirkeby = KirkebyConfig::calibration(&deconv);
+        // The equaliser's settings have one home, shared with the ground truth.
+        let equaliser = EqualiserConfig::calibration(kirkeby);
         Self {
             sweep: SweepSpec { f1_hz: 50.0, amplitude: 0.5, ..SweepSpec::default() },
-            kirkeby: KirkebyConfig::calibration(&deconv),
+            kirkeby,
             deconv,
-            check_band_hz: (62.0, 625.0),
+            check_band_hz: equaliser.band_hz,
             max_deviation_db: 1.0,
-            smoothing_fraction: 3.0,
-            design_tolerance_db: 0.25,
-            max_designs: 16,
+            smoothing_fraction: equaliser.fraction,
+            design_tolerance_db: equaliser.tolerance_db,
+            max_designs: equaliser.max_designs,
             max_attempts: 3,
             max_velocity_m_s: 0.1,
             aim: AimPolicy::default(),
