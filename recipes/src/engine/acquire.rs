@@ -30,7 +30,7 @@ impl AcquisitionProblem {
     pub fn of(acq: &Acquisition) -> Option<Self> {
         if !acq.is_whole() {
             Some(Self::Gap)
-        } else if acq.clipped {
+        } else if acq.recording.clipped {
             Some(Self::Clipped)
         } else {
             None

@@ -162,7 +162,7 @@ impl<'a> ReferenceCheck<'a> {
             }
             let acq = acquired.acquisition;
             // A processing failure is a bad recording (as the scan treats it), not a reason to stop the scan.
-            let Ok(result) = prepared.process_channel(&acq.velocity_v, &acq.loopback_v) else {
+            let Ok(result) = prepared.process_channel(&acq.recording.velocity_v, &acq.recording.loopback_v) else {
                 continue;
             };
             if result.snr_db.is_some_and(|snr| snr < self.spec.min_snr_db) {

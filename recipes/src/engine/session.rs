@@ -4,7 +4,7 @@
 
 use metaplate_core::audio::{AudioConfig, AudioError};
 use metaplate_core::daq::{DaqConfig, DaqError};
-use metaplate_core::rig::{PlayRecordError, Rig};
+use metaplate_core::rig::{PlayRecordError, Recording, Rig};
 use metaplate_core::vibrometer::{VelocityScale, VibrometerError};
 
 use crate::error::RecipeError;
@@ -35,19 +35,12 @@ impl Default for RecoveryPolicy {
     }
 }
 
-/// What one acquisition recorded, in volts at the DAQ rate, and what went wrong in it.
+/// What one acquisition recorded ([`Recording`]: volts at the DAQ rate, clipping, gaps, underruns), with the
+/// velocity scale in force.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Acquisition {
-    /// The velocity input, V.
-    pub velocity_v: Vec<f64>,
-    /// The loopback input, V.
-    pub loopback_v: Vec<f64>,
-    /// Some sample sat on a rail.
-    pub clipped: bool,
-    /// Samples were lost (packets lost, samples missing, overrun): the recording has a gap.
-    pub gap: bool,
-    /// Audio underruns during the playback.
-    pub underruns: u32,
+    /// The recording.
+    pub recording: Recording,
     /// The vibrometer's velocity scale in force.
     pub scale: VelocityScale,
 }
@@ -55,7 +48,7 @@ pub struct Acquisition {
 impl Acquisition {
     /// Whether the recording is whole (no gap, no underrun); clipping is judged separately.
     pub fn is_whole(&self) -> bool {
-        !self.gap && self.underruns == 0
+        !self.recording.gap && self.recording.underruns == 0
     }
 }
 
@@ -318,15 +311,7 @@ impl<'a> Instruments<'a> {
         record_samples: usize,
         scale: VelocityScale,
     ) -> Result<Acquisition, Fault> {
-        let r = self.rig.play_and_record(buffers, record_samples)?;
-        Ok(Acquisition {
-            velocity_v: r.velocity_v,
-            loopback_v: r.loopback_v,
-            clipped: r.clipped,
-            gap: r.gap,
-            underruns: r.underruns,
-            scale,
-        })
+        Ok(Acquisition { recording: self.rig.play_and_record(buffers, record_samples)?, scale })
     }
 
     /// Asks for a larger velocity range after clipping: ten times the current full scale, if the instrument has

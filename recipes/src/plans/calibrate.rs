@@ -382,7 +382,7 @@ fn to_response(
     instruments: &Instruments<'_>,
 ) -> Result<Vec<f64>, RecipeError> {
     let volts_per_fs = instruments.rig.wiring.loopback_volts_per_full_scale;
-    let ir = deconvolve_with_reference(&acq.velocity_v, &acq.loopback_v, deconv)?;
+    let ir = deconvolve_with_reference(&acq.recording.velocity_v, &acq.recording.loopback_v, deconv)?;
     Ok(ir.iter().map(|v| v * acq.scale.m_s_per_v * volts_per_fs).collect())
 }
 

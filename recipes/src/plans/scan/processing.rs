@@ -77,7 +77,7 @@ fn process_channels(channels: Vec<Channel>, prepared: &PreparedLayout, gates: &G
         .map(|ch| {
             let acq = &ch.acquisition;
             // The response is kept even when a gate fails: it is committed if no later visit does better.
-            let (result, gate) = match prepared.process_channel(&acq.velocity_v, &acq.loopback_v) {
+            let (result, gate) = match prepared.process_channel(&acq.recording.velocity_v, &acq.recording.loopback_v) {
                 Err(e) => (None, Some(Problem::Processing(e.to_string()))),
                 Ok(r) => {
                     let to_units = acq.scale.m_s_per_v * gates.volts_per_fs;

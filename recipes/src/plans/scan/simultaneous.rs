@@ -46,10 +46,13 @@ impl Simultaneous {
         // Velocity in m/s per loopback full scale, so that the responses come out in m/s per full scale.
         let velocities: Vec<Vec<f64>> = acquisitions
             .iter()
-            .map(|a| a.velocity_v.iter().map(|v| v * a.scale.m_s_per_v * gates.volts_per_fs).collect())
+            .map(|a| a.recording.velocity_v.iter().map(|v| v * a.scale.m_s_per_v * gates.volts_per_fs).collect())
             .collect();
-        let pairs: Vec<(&[f64], &[f64])> =
-            velocities.iter().zip(acquisitions).map(|(v, a)| (v.as_slice(), a.loopback_v.as_slice())).collect();
+        let pairs: Vec<(&[f64], &[f64])> = velocities
+            .iter()
+            .zip(acquisitions)
+            .map(|(v, a)| (v.as_slice(), a.recording.loopback_v.as_slice()))
+            .collect();
         let mut results = self
             .protocol
             .decode(self.playback.response_gain.len(), &pairs, &self.deconv)
