@@ -11,9 +11,9 @@ use crate::run::{self, Reporter, RunArgs};
 ///
 /// Writes a calibration dataset into --out (one row per actuator for the filter taps, the measured response and
 /// the verification response), logs to `OUT/calibrate.log`, and shows a progress bar (or --json events). Ctrl-C
-/// stops after the actuator in flight (twice: abandons it) and prints the command that resumes; the exit code is
-/// then 130.
+/// stops after the actuator in flight (twice: abandons it) and prints the command that resumes.
 #[derive(Args, Debug)]
+#[command(after_help = run::EXIT_CODES_HELP)]
 pub struct CalibrateArgs {
     #[command(flatten)]
     pub run: RunArgs,
@@ -55,5 +55,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
         }
         eprintln!("calibration written to {}", common.out.display());
     }
+    let flagged = results.iter().filter(|r| r.status != metaplate_store::Status::Valid).count();
+    run::exit_if_flagged(flagged, "actuators");
     Ok(())
 }

@@ -58,9 +58,8 @@ enum Command {
     /// deconvolution and quality gates; one commit per point; Ctrl-C and crash safe, resumable (--resume).
     Scan(scan::ScanArgs),
     /// Measure the scan protocols' speed/accuracy trade on the mock lab: time per point, full-scan hours, error
-    /// against the ground truth, pixel area (JSON with --json, the Pareto plot with --figures DIR). Protocol
-    /// names: paper | quick | sequential:DxR | sequential-exp:DxR | hadamard:DxR | interleaved:D |
-    /// adaptive:DxR@SNR[/ROUNDS].
+    /// against the ground truth, pixel area (JSON with --json, the Pareto plot with --figures DIR); the protocol
+    /// names: `--help` of `--protocols`.
     Tradeoff(tradeoff::TradeoffArgs),
     /// The simulated plate's ground truth: dispersion, Green's functions.
     Simulate {

@@ -1,6 +1,6 @@
 //! What `metaplate calibrate` and `metaplate scan` share: their common options, the log file in the run directory,
-//! progress (a bar, or `--json` events on stdout), Ctrl-C, and how a run that stops early ends (the resume command,
-//! exit code 130 for an interrupt).
+//! progress (a bar, or `--json` events on stdout), Ctrl-C, and how a run ends: its exit code ([`EXIT_CODES_HELP`])
+//! and, for a run that stops early, the resume command.
 
 use std::fs::{File, OpenOptions};
 use std::io::Write;
@@ -18,6 +18,23 @@ use crate::progress;
 
 /// Exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
 pub const EXIT_INTERRUPTED: i32 = 130;
+
+/// Exit code of a run that finished but committed flagged rows (status failed, dropout or overrange): the dataset
+/// is whole, and some of it needs a look. Not 2, which is a usage error (clap's).
+pub const EXIT_FLAGGED: i32 = 3;
+
+/// The exit codes of `calibrate` and `scan`, for their `--help`.
+pub const EXIT_CODES_HELP: &str = "Exit codes: 0 finished, every row valid or re-measured; 3 finished with flagged \
+rows (failed, dropout or overrange; the summary says how many); 130 stopped by Ctrl-C (resume with --resume); 1 \
+failed (the message says why); 2 bad arguments.";
+
+/// Ends a run that finished: exits with [`EXIT_FLAGGED`] when it committed `flagged` flagged rows, saying so.
+pub fn exit_if_flagged(flagged: usize, unit: &str) {
+    if flagged > 0 {
+        eprintln!("finished with {flagged} flagged {unit} (exit code {EXIT_FLAGGED})");
+        std::process::exit(EXIT_FLAGGED);
+    }
+}
 
 /// Where the instruments come from: exactly one of `--scene` and `--hardware`.
 #[derive(Args, Debug, Clone)]

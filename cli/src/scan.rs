@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use metaplate_core::grid::GridSubset;
+use metaplate_recipes::excitation::NAMES as PROTOCOL_NAMES;
 use metaplate_recipes::{Calibration, RunControl, ScanConfig, ScanPlan, ScanProtocol, scan};
 
 use crate::rig::{self, Plate};
@@ -29,8 +30,9 @@ pub struct Drive {
 /// Writes the Green's functions dataset into --out (one row per point and actuator: impulse response, SNR,
 /// status valid / re-measured / overrange / dropout / failed, retries), logs to `OUT/scan.log`, and shows a
 /// progress bar with the rate and the ETA in hours of the rig's clock (or --json events). Ctrl-C stops after the
-/// point in flight (twice: abandons it) and prints the command that resumes; the exit code is then 130.
+/// point in flight (twice: abandons it) and prints the command that resumes.
 #[derive(Args, Debug)]
+#[command(after_help = run::EXIT_CODES_HELP)]
 pub struct ScanArgs {
     #[command(flatten)]
     pub run: RunArgs,
@@ -40,9 +42,8 @@ pub struct ScanArgs {
     /// point.
     #[arg(long)]
     pub grid: Option<GridSubset>,
-    /// Excitation protocol: `paper` (3 s linear sweep 62 to 625 Hz, 5 repetitions), `quick` (1 s, 2 repetitions),
-    /// or another protocol the recipes know.
-    #[arg(long, default_value = "paper")]
+    /// Excitation protocol (the list below is the recipes' registry).
+    #[arg(long, default_value = "paper", long_help = protocol_help())]
     pub protocol: String,
 }
 
@@ -92,7 +93,16 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
             common.out.display()
         );
     }
+    let flagged: usize =
+        summary.statuses.iter().filter(|(s, _)| ["failed", "dropout", "overrange"].contains(s)).map(|(_, n)| n).sum();
+    run::exit_if_flagged(flagged, "rows");
     Ok(())
+}
+
+/// The `--protocol` help: every name the recipes' registry knows, with what it plays.
+pub fn protocol_help() -> String {
+    let names: Vec<String> = PROTOCOL_NAMES.iter().map(|(name, what)| format!("  {name}: {what}")).collect();
+    format!("Excitation protocol, one of:\n{}", names.join("\n"))
 }
 
 /// The scan plan over `plate`'s grid and mask, on the `subset` if given.

@@ -44,10 +44,9 @@ pub struct TradeoffArgs {
     /// Grid subset NXxNY (evenly spread points of the scene's grid; masked points are skipped).
     #[arg(long, default_value = "5x3")]
     grid: String,
-    /// Comma-separated protocols. Syntax: paper | quick | sequential:DxR | sequential-exp:DxR | hadamard:DxR |
-    /// interleaved:D | adaptive:DxR@SNR[/ROUNDS] (D sweep seconds >= 0.6, R periods per shot (>= 2 for
-    /// adaptive), SNR dB).
-    #[arg(long, default_value = DEFAULT_PROTOCOLS)]
+    /// Comma-separated excitation protocols (D sweep seconds >= 0.6, R periods per shot (>= 2 for adaptive), SNR
+    /// dB).
+    #[arg(long, default_value = DEFAULT_PROTOCOLS, long_help = crate::scan::protocol_help())]
     protocols: String,
     /// Seed of the lab and the scan.
     #[arg(long, default_value_t = 7)]
@@ -63,7 +62,7 @@ pub struct TradeoffArgs {
 }
 
 /// One protocol's measured trade.
-struct Measured {
+struct ProtocolTrade {
     name: String,
     time_per_point_s: f64,
     nominal_time_per_point_s: f64,
@@ -143,7 +142,7 @@ fn measure(
     protocol: ScanProtocol,
     seed: u64,
     full_points: usize,
-) -> anyhow::Result<Measured> {
+) -> anyhow::Result<ProtocolTrade> {
     let dir = tempfile_dir()?;
     let out = Output {
         dir: dir.clone(),
@@ -174,7 +173,7 @@ fn measure(
     let pixel = median_pixel_area(&dataset, plan);
     let time_per_point_s = summary.clock_s / plan.points.len() as f64;
     let _ = std::fs::remove_dir_all(&dir);
-    Ok(Measured {
+    Ok(ProtocolTrade {
         name,
         time_per_point_s,
         nominal_time_per_point_s: nominal,
@@ -204,7 +203,7 @@ fn tempfile_dir() -> anyhow::Result<PathBuf> {
     Ok(dir)
 }
 
-fn to_json(scene: &str, plan: &ScanPlan, full_points: usize, rows: &[Measured]) -> Value {
+fn to_json(scene: &str, plan: &ScanPlan, full_points: usize, rows: &[ProtocolTrade]) -> Value {
     let paper = rows.iter().find(|m| m.name == "paper");
     // The fastest protocol that reaches the paper's median error (within 0.5 dB: two draws of the same noise
     // differ by about that much on a small grid) in a fifth of its time per point or less.

@@ -195,3 +195,36 @@ fn a_hardware_file_without_its_devices_is_a_clear_error() {
     assert!(stderr.contains("cannot open the LDV") && stderr.contains("usb-FTDI"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn a_scan_that_finishes_with_flagged_rows_exits_3_and_the_codes_are_in_the_help() {
+    let cache = cache_dir();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("scan");
+    // The scan every test runs, with an adaptive target no measurement reaches in its one round: every row is
+    // committed `failed` (the target is final, nothing is deferred), the dataset whole.
+    let protocol = "adaptive:1x2@200/1";
+    let mut args: Vec<String> = ["scan", "--out", dir.to_str().unwrap(), "--uncalibrated"].map(String::from).to_vec();
+    for pair in SCAN.chunks(2) {
+        let value = if pair[0] == "--protocol" { protocol } else { pair[1] };
+        args.extend([pair[0].to_string(), value.to_string()]);
+    }
+    let out = run(&args, cache);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("flagged"), "{stderr}");
+    let dataset = Dataset::open(&dir).unwrap();
+    assert_eq!(dataset.len(), POINTS * ACTUATORS, "finished: one row per point and actuator");
+    assert!(dataset.rows().iter().all(|row| row.status == Some(Status::Failed)));
+
+    for command in ["scan", "calibrate"] {
+        let help = run(&[command.to_string(), "--help".to_string()], cache);
+        let help = text(&help.stdout);
+        assert!(help.contains("Exit codes: 0 finished") && help.contains("130 stopped"), "{help}");
+    }
+    // The protocol names come from the recipes' registry.
+    let help = text(&run(&["scan".to_string(), "--help".to_string()], cache).stdout);
+    for (name, _) in metaplate_recipes::excitation::NAMES {
+        assert!(help.contains(name), "{name} missing from: {help}");
+    }
+}

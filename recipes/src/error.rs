@@ -13,6 +13,14 @@ pub enum RecipeError {
     /// The recipe's configuration or inputs are invalid (a wiring, a grid, a calibration that does not fit).
     #[error("invalid recipe configuration: {0}")]
     Config(String),
+    /// An instrument kept failing in a way that repeating the step could not fix (every acquisition in a row spoiled,
+    /// every recording with a gap): the rig needs a person.
+    #[error("instrument: {0}")]
+    Device(String),
+    /// A failure inside the recipe itself (a worker thread that stopped, a playback shot with no buffers): a bug,
+    /// never the user's configuration.
+    #[error("internal error: {0}")]
+    Internal(String),
     /// The vibrometer failed in a way recovery cannot fix (it refuses the command).
     #[error(transparent)]
     Vibrometer(#[from] VibrometerError),

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use common::{error_db, lab_and_plan, median_and_worst, metamaterial, output, prefix, quick_config};
 use metaplate_core::clock::Clock;
 use metaplate_core::scene::{FaultKind, FaultSpec};
-use metaplate_recipes::instruments::RecoveryPolicy;
+use metaplate_recipes::RecoveryPolicy;
 use metaplate_recipes::scan::{ScanConfig, scan};
 use metaplate_recipes::{Event, RunControl};
 use metaplate_store::{Dataset, Status};

@@ -5,9 +5,9 @@
 
 use std::sync::Arc;
 
-use crate::audio::AudioOut;
+use crate::audio::{AudioConfig, AudioError, AudioOut};
 use crate::clock::Clock;
-use crate::daq::Daq;
+use crate::daq::{Daq, DaqChannel, DaqConfig, DaqError};
 use crate::vibrometer::Vibrometer;
 
 /// How the instruments are cabled, and the rates they run at.
@@ -67,6 +67,57 @@ impl Wiring {
         }
         Ok(())
     }
+
+    /// The DAQ configuration for play-and-record: the velocity input first, the loopback second (the order
+    /// [`Rig::play_and_record`] reads them in), both at the wiring's range and rate, `block_len_samples` per block.
+    pub fn daq_config(&self, block_len_samples: u32) -> DaqConfig {
+        DaqConfig {
+            channels: vec![
+                DaqChannel { input: self.velocity_input, range_v: self.daq_range_v },
+                DaqChannel { input: self.loopback_input, range_v: self.daq_range_v },
+            ],
+            sample_rate_hz: self.daq_sample_rate_hz,
+            block_len_samples,
+        }
+    }
+
+    /// The audio configuration: every opened channel at the wiring's rate.
+    pub fn audio_config(&self) -> AudioConfig {
+        AudioConfig { sample_rate_hz: self.audio_sample_rate_hz, channels: self.audio_channels }
+    }
+}
+
+/// What the DAQ recorded while the audio interface played, in volts at the DAQ rate, and what went wrong in it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    /// The velocity input, V.
+    pub velocity_v: Vec<f64>,
+    /// The loopback input, V.
+    pub loopback_v: Vec<f64>,
+    /// Some sample sat on a rail.
+    pub clipped: bool,
+    /// Samples were lost (packets lost, samples missing, overrun): the recording has a gap.
+    pub gap: bool,
+    /// Audio underruns during the playback.
+    pub underruns: u32,
+}
+
+/// Why a play-and-record failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PlayRecordError {
+    /// The DAQ failed.
+    #[error(transparent)]
+    Daq(#[from] DaqError),
+    /// The audio interface failed.
+    #[error(transparent)]
+    Audio(#[from] AudioError),
+    /// A DAQ block lacked the velocity or the loopback input (the DAQ is not configured as
+    /// [`Wiring::daq_config`] says).
+    #[error("DAQ block with {channels} channels, expected 2")]
+    Channels {
+        /// Channels in the block.
+        channels: usize,
+    },
 }
 
 /// The instruments of one lab, as capabilities, with their wiring and the clock they share.
@@ -81,6 +132,46 @@ pub struct Rig {
     pub clock: Arc<dyn Clock>,
     /// How it is cabled.
     pub wiring: Wiring,
+}
+
+impl Rig {
+    /// Plays `buffers` (one per audio channel, at the audio rate) while recording `record_samples` samples per
+    /// channel: starts the DAQ, then the audio, reads blocks to the length, finishes the audio and stops the DAQ.
+    /// No retries and no recovery: that is the caller's policy. The DAQ must be configured as
+    /// [`Wiring::daq_config`] says (velocity first, loopback second).
+    ///
+    /// # Errors
+    /// The device's error as [`PlayRecordError`] says; after one the devices may still be running (the caller stops
+    /// them), except that a refused audio start stops the DAQ.
+    pub fn play_and_record(
+        &mut self,
+        buffers: &[Vec<f64>],
+        record_samples: usize,
+    ) -> Result<Recording, PlayRecordError> {
+        self.daq.start()?;
+        if let Err(e) = self.audio.start(buffers) {
+            let _ = self.daq.stop();
+            return Err(e.into());
+        }
+        let mut velocity_v = Vec::with_capacity(record_samples);
+        let mut loopback_v = Vec::with_capacity(record_samples);
+        let (mut clipped, mut gap) = (false, false);
+        while velocity_v.len() < record_samples {
+            let block = self.daq.read_block()?;
+            let [velocity, loopback, ..] = block.volts.as_slice() else {
+                return Err(PlayRecordError::Channels { channels: block.volts.len() });
+            };
+            clipped |= block.integrity.clipped;
+            gap |= !block.integrity.is_contiguous();
+            velocity_v.extend_from_slice(velocity);
+            loopback_v.extend_from_slice(loopback);
+        }
+        velocity_v.truncate(record_samples);
+        loopback_v.truncate(record_samples);
+        let report = self.audio.finish()?;
+        self.daq.stop()?;
+        Ok(Recording { velocity_v, loopback_v, clipped, gap, underruns: report.underruns })
+    }
 }
 
 #[cfg(test)]

@@ -36,6 +36,15 @@ pub struct EqualiserConfig {
     pub max_designs: usize,
 }
 
+impl EqualiserConfig {
+    /// The paper's calibration settings around `kirkeby`: third-octave smoothing, flat over 62..625 Hz (the scan's
+    /// band), refined until within 0.25 dB predicted, at most 16 designs. The one home of these numbers: the
+    /// calibrate recipe and the ground truth both design with them.
+    pub fn calibration(kirkeby: KirkebyConfig) -> Self {
+        Self { kirkeby, fraction: 3.0, band_hz: (62.0, 625.0), tolerance_db: 0.25, max_designs: 16 }
+    }
+}
+
 /// A designed equaliser.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Equaliser {

@@ -87,15 +87,7 @@ impl CompensationConfig {
             response_delay_samples: 0,
             ..recipe
         };
-        Self {
-            equaliser: EqualiserConfig {
-                kirkeby,
-                fraction: 3.0,
-                band_hz: (62.0, 625.0),
-                tolerance_db: 0.25,
-                max_designs: 16,
-            },
-        }
+        Self { equaliser: EqualiserConfig::calibration(kirkeby) }
     }
 }
 

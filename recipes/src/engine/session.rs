@@ -1,23 +1,14 @@
-//! One acquisition (DAQ recording while the audio interface plays), and recovery from device faults: reconnect,
+//! The rig's session for recipes: one acquisition ([`Rig::play_and_record`] at the session's velocity range), and
+//! recovery from device faults: reconnect,
 //! reopen, re-apply settings, poll while a device stays away.
 
 use metaplate_core::audio::{AudioConfig, AudioError};
-use metaplate_core::daq::{DaqChannel, DaqConfig, DaqError};
-use metaplate_core::rig::Rig;
+use metaplate_core::daq::{DaqConfig, DaqError};
+use metaplate_core::rig::{PlayRecordError, Recording, Rig};
 use metaplate_core::vibrometer::{VelocityScale, VibrometerError};
 
-use metaplate_dsp::deconv::DeconvConfig;
-use metaplate_dsp::kirkeby::KirkebyFilter;
-use metaplate_dsp::pipeline::{PreparedLayout, RepetitionLayout};
-use metaplate_store::{Dataset, Status, StoreError};
-
-use crate::calibrate::{Calibration, record_samples};
-use crate::control::{Event, Observer, RunControl};
-use crate::dataset::Output;
 use crate::error::RecipeError;
-use crate::quality::relative_error_db;
-use crate::scan::{ScanConfig, ScanPlan, ScanProtocol};
-use crate::signals::{Playback, excitation};
+use crate::events::{Event, Observer, RunControl};
 
 /// How long and how often a recipe waits for a device that went away.
 ///
@@ -44,19 +35,12 @@ impl Default for RecoveryPolicy {
     }
 }
 
-/// What one acquisition recorded, in volts at the DAQ rate, and what went wrong in it.
+/// What one acquisition recorded ([`Recording`]: volts at the DAQ rate, clipping, gaps, underruns), with the
+/// velocity scale in force.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Acquisition {
-    /// The velocity input, V.
-    pub velocity_v: Vec<f64>,
-    /// The loopback input, V.
-    pub loopback_v: Vec<f64>,
-    /// Some sample sat on a rail.
-    pub clipped: bool,
-    /// Samples were lost (packets lost, samples missing, overrun): the recording has a gap.
-    pub gap: bool,
-    /// Audio underruns during the playback.
-    pub underruns: u32,
+    /// The recording.
+    pub recording: Recording,
     /// The vibrometer's velocity scale in force.
     pub scale: VelocityScale,
 }
@@ -64,7 +48,7 @@ pub struct Acquisition {
 impl Acquisition {
     /// Whether the recording is whole (no gap, no underrun); clipping is judged separately.
     pub fn is_whole(&self) -> bool {
-        !self.gap && self.underruns == 0
+        !self.recording.gap && self.recording.underruns == 0
     }
 }
 
@@ -107,6 +91,16 @@ impl From<DaqError> for Fault {
                 Fault::Spoiled(e.to_string())
             }
             DaqError::Config { .. } | DaqError::Unavailable { .. } => Fault::Fatal(e.into()),
+        }
+    }
+}
+
+impl From<PlayRecordError> for Fault {
+    fn from(e: PlayRecordError) -> Self {
+        match e {
+            PlayRecordError::Daq(e) => e.into(),
+            PlayRecordError::Audio(e) => e.into(),
+            PlayRecordError::Channels { .. } => Fault::Spoiled(e.to_string()),
         }
     }
 }
@@ -157,16 +151,8 @@ impl<'a> Instruments<'a> {
         observer: &mut dyn Observer,
     ) -> Result<Self, RecipeError> {
         rig.wiring.validate().map_err(RecipeError::Config)?;
-        let w = &rig.wiring;
-        let daq_config = DaqConfig {
-            channels: vec![
-                DaqChannel { input: w.velocity_input, range_v: w.daq_range_v },
-                DaqChannel { input: w.loopback_input, range_v: w.daq_range_v },
-            ],
-            sample_rate_hz: w.daq_sample_rate_hz,
-            block_len_samples: BLOCK_LEN_SAMPLES,
-        };
-        let audio_config = AudioConfig { sample_rate_hz: w.audio_sample_rate_hz, channels: w.audio_channels };
+        let daq_config = rig.wiring.daq_config(BLOCK_LEN_SAMPLES);
+        let audio_config = rig.wiring.audio_config();
         let mut me = Self {
             rig,
             daq_config,
@@ -224,7 +210,7 @@ impl<'a> Instruments<'a> {
                     spoiled += 1;
                     tracing::warn!(%detail, "step spoiled, repeating");
                     if spoiled >= MAX_SPOILED_IN_A_ROW {
-                        return Err(RecipeError::Config(format!(
+                        return Err(RecipeError::Device(format!(
                             "{MAX_SPOILED_IN_A_ROW} attempts in a row failed, the last with: {detail}"
                         )));
                     }
@@ -325,29 +311,7 @@ impl<'a> Instruments<'a> {
         record_samples: usize,
         scale: VelocityScale,
     ) -> Result<Acquisition, Fault> {
-        self.rig.daq.start()?;
-        if let Err(e) = self.rig.audio.start(buffers) {
-            let _ = self.rig.daq.stop();
-            return Err(e.into());
-        }
-        let mut velocity_v = Vec::with_capacity(record_samples + BLOCK_LEN_SAMPLES as usize);
-        let mut loopback_v = Vec::with_capacity(record_samples + BLOCK_LEN_SAMPLES as usize);
-        let (mut clipped, mut gap) = (false, false);
-        while velocity_v.len() < record_samples {
-            let block = self.rig.daq.read_block()?;
-            if block.volts.len() < 2 {
-                return Err(Fault::Spoiled(format!("DAQ block with {} channels, expected 2", block.volts.len())));
-            }
-            clipped |= block.integrity.clipped;
-            gap |= !block.integrity.is_contiguous();
-            velocity_v.extend_from_slice(&block.volts[0]);
-            loopback_v.extend_from_slice(&block.volts[1]);
-        }
-        velocity_v.truncate(record_samples);
-        loopback_v.truncate(record_samples);
-        let report = self.rig.audio.finish()?;
-        self.rig.daq.stop()?;
-        Ok(Acquisition { velocity_v, loopback_v, clipped, gap, underruns: report.underruns, scale })
+        Ok(Acquisition { recording: self.rig.play_and_record(buffers, record_samples)?, scale })
     }
 
     /// Asks for a larger velocity range after clipping: ten times the current full scale, if the instrument has
@@ -365,159 +329,5 @@ impl<'a> Instruments<'a> {
             Err(VibrometerError::InvalidArgument { .. }) => Ok(false),
             Err(e) => Err(e.into()),
         }
-    }
-}
-
-/// After a device recovery, before the next point, a scan re-measures one committed point (the plan's first one
-/// committed valid or re-measured, one actuator) and compares it with what was committed: the check the issue asks
-/// of every recovery (reconnect, drain, re-apply settings, re-measure a reference point), so that a rig that came
-/// back different (a setting not restored, a moved beam or plate) is reported instead of silently measured.
-///
-/// The reference is re-measured with one actuator alone, the scan protocol's sweep and repetitions and the
-/// actuator's inverse filter: for a simultaneous protocol (Hadamard) that is the same response by superposition,
-/// in the same units. The deviation is logged and reported as [`Event::ReferenceChecked`]; above
-/// [`RecoveryPolicy::reference_limit_db`] it is a warning (the scan goes on: a person decides).
-pub(crate) struct ReferenceCheck<'a> {
-    dir: &'a std::path::Path,
-    points: &'a [usize],
-    protocol: &'a ScanProtocol,
-    filters: Option<&'a [KirkebyFilter]>,
-    actuator: usize,
-    limit_db: f64,
-    /// The scan's SNR gate: a re-measure below it (a dropout in the middle) is repeated, not compared.
-    min_snr_db: f64,
-    /// Loaded at the first check.
-    reference: Option<Reference>,
-}
-
-/// A committed point to re-measure: grid index, beam position (m), committed response (m/s per full scale).
-type Reference = (usize, (f64, f64), Vec<f64>);
-
-impl<'a> ReferenceCheck<'a> {
-    /// The check for a scan of `plan` into `out` with `cfg` and `calibration`, on actuator 0.
-    pub(crate) fn new(
-        out: &'a Output,
-        plan: &'a ScanPlan,
-        cfg: &'a ScanConfig,
-        calibration: Option<&'a Calibration>,
-    ) -> Self {
-        Self {
-            dir: &out.dir,
-            points: &plan.points,
-            protocol: &cfg.protocol,
-            filters: calibration.map(|c| c.filters.as_slice()),
-            actuator: 0,
-            limit_db: cfg.recovery.reference_limit_db,
-            min_snr_db: cfg.min_snr_db,
-            reference: None,
-        }
-    }
-
-    /// If a device was recovered since the last call, re-measures the reference point and reports the deviation;
-    /// returns it, dB (`None` when nothing was recovered or nothing is committed yet to compare with).
-    ///
-    /// # Errors
-    /// Device errors that recovery cannot fix; [`RecipeError::Store`] if the committed reference cannot be read.
-    pub(crate) fn after_recovery(
-        &mut self,
-        instruments: &mut Instruments<'_>,
-        control: &RunControl,
-        observer: &mut dyn Observer,
-    ) -> Result<Option<f64>, RecipeError> {
-        if !instruments.recovered {
-            return Ok(None);
-        }
-        // Cleared first: a recovery during the re-measure sets it again, and the next point checks once more.
-        instruments.recovered = false;
-        if self.reference.is_none() {
-            self.reference = self.load()?;
-        }
-        let Some((point, position_m, committed)) = &self.reference else {
-            tracing::info!("device recovered before any point was committed: no reference to re-measure");
-            return Ok(None);
-        };
-        let Some(measured) = self.measure(instruments, *position_m, control, observer)? else {
-            tracing::warn!(point, "the reference re-measure failed the scan's gates three times; not compared");
-            return Ok(None);
-        };
-        let n = measured.len().min(committed.len());
-        let deviation_db = relative_error_db(&measured[..n], &committed[..n])?;
-        if deviation_db > self.limit_db {
-            tracing::warn!(
-                point,
-                deviation_db,
-                limit_db = self.limit_db,
-                "after recovery the reference point differs from its committed response: check the rig"
-            );
-        } else {
-            tracing::info!(point, deviation_db, "reference point re-measured after recovery");
-        }
-        observer.event(&Event::ReferenceChecked {
-            point: *point,
-            actuator: self.actuator,
-            deviation_db,
-            limit_db: self.limit_db,
-        });
-        Ok(Some(deviation_db))
-    }
-
-    /// The plan's first point whose reference row is committed as valid or re-measured.
-    fn load(&self) -> Result<Option<Reference>, RecipeError> {
-        let dataset = match Dataset::open(self.dir) {
-            Ok(d) => d,
-            Err(StoreError::EmptyDataset { .. }) => return Ok(None),
-            Err(e) => return Err(e.into()),
-        };
-        let key = self.actuator as u16;
-        for &p in self.points {
-            let (Some(meta), Some(ir)) = (dataset.meta(p as u32, key), dataset.ir(p as u32, key)) else {
-                continue;
-            };
-            if matches!(meta.status, Some(Status::Valid | Status::ReMeasured)) {
-                let ir = ir.iter().map(|v| f64::from(*v)).collect();
-                return Ok(Some((p, (meta.x_m, meta.y_m), ir)));
-            }
-        }
-        Ok(None)
-    }
-
-    /// One response of the reference actuator at `position_m`, m/s per full scale; `None` if three recordings in a
-    /// row had gaps, clipped or failed the SNR gate.
-    fn measure(
-        &self,
-        instruments: &mut Instruments<'_>,
-        (x_m, y_m): (f64, f64),
-        control: &RunControl,
-        observer: &mut dyn Observer,
-    ) -> Result<Option<Vec<f64>>, RecipeError> {
-        const ATTEMPTS: u32 = 3;
-        let fs = instruments.daq_rate_hz();
-        let sweep = excitation(&self.protocol.sweep, fs)?;
-        let deconv = DeconvConfig { sample_rate_hz: fs, ..self.protocol.deconv };
-        // The scan's tail: the response and the longest filter.
-        let fir_len = self.filters.map_or(0, |f| f.iter().map(|k| k.taps.len()).max().unwrap_or(0));
-        let filter = self.filters.and_then(|f| f.get(self.actuator));
-        let playback = Playback::new(&sweep, self.protocol.repetitions, deconv.ir_len + fir_len, filter)?;
-        let buffers = playback.audio_buffers(&instruments.rig.wiring, self.actuator, fs)?;
-        let record = record_samples(&playback, fs);
-        let layout = RepetitionLayout { excitation: sweep, repetitions: self.protocol.repetitions };
-        let prepared = PreparedLayout::new(&layout, &deconv)?;
-        instruments.with_recovery(control, observer, |i| i.aim(x_m, y_m))?;
-        for _ in 0..ATTEMPTS {
-            let acq = instruments.with_recovery(control, observer, |i| i.acquire(&buffers, record))?;
-            if !acq.is_whole() || acq.clipped {
-                continue;
-            }
-            // A processing failure is a bad recording (as the scan treats it), not a reason to stop the scan.
-            let Ok(result) = prepared.process_channel(&acq.velocity_v, &acq.loopback_v) else {
-                continue;
-            };
-            if result.snr_db.is_some_and(|snr| snr < self.min_snr_db) {
-                continue;
-            }
-            let to_units = acq.scale.m_s_per_v * instruments.rig.wiring.loopback_volts_per_full_scale;
-            return Ok(Some(result.ir.iter().map(|v| v * to_units).collect()));
-        }
-        Ok(None)
     }
 }

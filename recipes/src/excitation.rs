@@ -23,7 +23,65 @@ use metaplate_dsp::protocol::Protocol;
 use metaplate_dsp::sweep::SweepSpec;
 
 use crate::error::RecipeError;
-use crate::scan::ScanProtocol;
+
+/// The excitation and its processing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanProtocol {
+    /// Name recorded in the manifest (`paper`, `quick`).
+    pub name: String,
+    /// One period of the excitation (its `sample_rate_hz` is replaced by the DAQ's).
+    pub sweep: SweepSpec,
+    /// Periods played back to back.
+    pub repetitions: usize,
+    /// Deconvolution (its `sample_rate_hz` is replaced by the DAQ's).
+    pub deconv: DeconvConfig,
+    /// How the actuators are played (one at a time, or all at once).
+    pub excitation: Excitation,
+    /// Averaging until a target SNR (simultaneous protocols only); `None`: one round.
+    pub adaptive: Option<Adaptive>,
+}
+
+impl ScanProtocol {
+    /// The paper's: a 3 s linear sweep 62..625 Hz, 5 repetitions, [`DeconvConfig::paper`] (0.5 s responses).
+    pub fn paper() -> Self {
+        Self {
+            name: "paper".into(),
+            sweep: SweepSpec::default(),
+            repetitions: 5,
+            deconv: DeconvConfig::paper(),
+            excitation: Excitation::Sequential,
+            adaptive: None,
+        }
+    }
+
+    /// For tests and quick looks: a 1 s sweep 62..625 Hz, 2 repetitions, the paper's deconvolution (0.5 s
+    /// responses fit the 1 s period). 7.5 times less playing than the paper's; the SNR drops by about 10 dB (the
+    /// sweep energy per period falls 3 times and 2 periods are averaged instead of 5).
+    pub fn quick() -> Self {
+        Self {
+            name: "quick".into(),
+            sweep: SweepSpec { duration_s: 1.0, ..SweepSpec::default() },
+            repetitions: 2,
+            deconv: DeconvConfig::paper(),
+            excitation: Excitation::Sequential,
+            adaptive: None,
+        }
+    }
+
+    /// A protocol by name: `paper`, `quick`, or one with settings such as `hadamard:1x2` (the syntax and every
+    /// protocol's assumptions: [`crate::excitation`]).
+    ///
+    /// # Errors
+    /// [`RecipeError::Config`] for an unknown name or bad settings.
+    pub fn by_name(name: &str) -> Result<Self, RecipeError> {
+        parse(name)
+    }
+
+    /// Seconds of playback per actuator and point (repetitions and tail), at nominal rates.
+    pub fn seconds_per_actuator(&self) -> f64 {
+        self.repetitions as f64 * self.sweep.duration_s + self.deconv.ir_len as f64 / self.deconv.sample_rate_hz
+    }
+}
 
 /// How the actuators are played at a point.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -21,7 +21,7 @@ pub const DRIVE_PEAK_FS: f64 = 0.89;
 /// actuator's inverse filter, if any) and the loopback reference (the repeated excitation, delayed by the filter's
 /// modelling delay so that the reference division removes that delay), both scaled alike.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Playback {
+pub struct DrivePlayback {
     /// Signal for the actuator's channel, full scale, at the DAQ rate.
     pub drive: Vec<f64>,
     /// Signal for the loopback channel, full scale, at the DAQ rate.
@@ -31,7 +31,7 @@ pub struct Playback {
     pub scale: f64,
 }
 
-impl Playback {
+impl DrivePlayback {
     /// Builds the playback of `repetitions` copies of `excitation` back to back, then `tail_samples` of silence,
     /// through `filter` (or raw when `None`), at the DAQ rate.
     ///
@@ -75,10 +75,10 @@ impl Playback {
     /// The audio buffers (one per opened channel): the drive on `actuator`'s channel, the loopback on the loopback
     /// channel, silence elsewhere, converted from `daq_rate_hz` to the wiring's audio rate.
     ///
-    /// Valid range: as [`Playback::at_audio_rate`].
+    /// Valid range: as [`DrivePlayback::at_audio_rate`].
     ///
     /// # Errors
-    /// As [`Playback::at_audio_rate`].
+    /// As [`DrivePlayback::at_audio_rate`].
     pub fn audio_buffers(
         &self,
         wiring: &Wiring,
@@ -166,7 +166,7 @@ pub struct SimultaneousPlayback {
     /// Per shot, per actuator: the sign (+1 or -1) of its drive.
     pub signs: Vec<Vec<f64>>,
     /// Per actuator: multiply the response decoded against the loopback by this to get the response per full
-    /// scale of the compensated drive (as the sequential [`Playback`] gives).
+    /// scale of the compensated drive (as the sequential [`DrivePlayback`] gives).
     pub response_gain: Vec<f64>,
     /// Samples per channel at the DAQ rate (drive, tail and all).
     pub daq_len: usize,
@@ -177,7 +177,7 @@ impl SimultaneousPlayback {
     /// after the last period, through `filters` (one per actuator, or raw when `None`).
     ///
     /// Valid range: a protocol whose shots all play every actuator with a gain of +1 or -1 and share their delays
-    /// (Hadamard, interleaved); one filter per wired actuator; rates as [`Playback::at_audio_rate`].
+    /// (Hadamard, interleaved); one filter per wired actuator; rates as [`DrivePlayback::at_audio_rate`].
     ///
     /// # Errors
     /// [`RecipeError::Config`] for a protocol outside that range, the wrong number of filters, or rates out of
@@ -337,7 +337,7 @@ mod tests {
             modelling_delay_samples: 2,
             max_boost_db: 0.0,
         };
-        let p = Playback::new(&x, 2, 3, Some(&filter)).unwrap();
+        let p = DrivePlayback::new(&x, 2, 3, Some(&filter)).unwrap();
         assert_eq!(p.drive.len(), 11);
         // Drive peak 3 scaled to DRIVE_PEAK_FS; the loopback is the excitation delayed by 2, scaled alike.
         let scale = DRIVE_PEAK_FS / 3.0;
@@ -348,14 +348,14 @@ mod tests {
         }
         assert_eq!(p.loopback[2], 0.0);
         assert!((p.loopback[3] - scale).abs() < 1e-15);
-        let raw = Playback::new(&x, 1, 0, None).unwrap();
+        let raw = DrivePlayback::new(&x, 1, 0, None).unwrap();
         assert_eq!(raw.scale, DRIVE_PEAK_FS.min(1.0) / 1.0);
     }
 
     #[test]
     fn buffers_put_drive_and_loopback_on_their_channels_at_the_audio_rate() {
         let x = excitation(&SweepSpec { duration_s: 0.1, ..SweepSpec::default() }, 24_000.0).unwrap();
-        let p = Playback::new(&x, 2, 100, None).unwrap();
+        let p = DrivePlayback::new(&x, 2, 100, None).unwrap();
         let buffers = p.audio_buffers(&wiring(), 1, 24_000.0).unwrap();
         assert_eq!(buffers.len(), 4);
         assert_eq!(buffers[1].len(), 2 * p.drive.len());

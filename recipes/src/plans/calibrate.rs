@@ -19,13 +19,16 @@ use metaplate_dsp::sweep::SweepSpec;
 use metaplate_store::{Dataset, DatasetMeta, GridSpec, IrMeta, IrRecord, Status};
 use serde_json::{Map, Value, json};
 
-use crate::aim::{AimPolicy, aim};
-use crate::control::{Event, Observer, RunControl};
-use crate::dataset::{self, Output};
+use crate::drive::{DrivePlayback, excitation};
+use crate::engine::acquire::{AcquisitionProblem, RetryPolicy, acquire, record_samples};
+use crate::engine::aim::{AimPolicy, aim};
+use crate::engine::now_unix_us;
+use crate::engine::run::Run;
+use crate::engine::session::{Acquisition, Instruments, RecoveryPolicy};
 use crate::error::RecipeError;
-use crate::instruments::{Acquisition, Instruments, RecoveryPolicy};
+use crate::events::{Event, Observer, RunControl};
+use crate::output::Output;
 use crate::quality::{Flatness, median, smoothed_flatness};
-use crate::signals::{Playback, excitation};
 
 /// Recipe name in the manifest.
 pub const RECIPE: &str = "calibrate";
@@ -79,15 +82,18 @@ impl Default for CalibrationConfig {
     /// [`KirkebyConfig::calibration`], flat within +/-1 dB over 62..625 Hz, 3 attempts, 0.1 m/s range.
     fn default() -> Self {
         let deconv = DeconvConfig::calibration();
+        let kirkeby = KirkebyConfig::calibration(&deconv);
+        // The equaliser's settings have one home, shared with the ground truth.
+        let equaliser = EqualiserConfig::calibration(kirkeby);
         Self {
             sweep: SweepSpec { f1_hz: 50.0, amplitude: 0.5, ..SweepSpec::default() },
-            kirkeby: KirkebyConfig::calibration(&deconv),
+            kirkeby,
             deconv,
-            check_band_hz: (62.0, 625.0),
+            check_band_hz: equaliser.band_hz,
             max_deviation_db: 1.0,
-            smoothing_fraction: 3.0,
-            design_tolerance_db: 0.25,
-            max_designs: 16,
+            smoothing_fraction: equaliser.fraction,
+            design_tolerance_db: equaliser.tolerance_db,
+            max_designs: equaliser.max_designs,
             max_attempts: 3,
             max_velocity_m_s: 0.1,
             aim: AimPolicy::default(),
@@ -174,64 +180,56 @@ pub fn calibrate(
         cfg.seed,
         CALIBRATION_GRID,
     );
-    let mut opened = dataset::open(out, meta, control)?;
+    let mut run = Run::open(out, meta, rig.clock.clone(), control)?;
     let total = sites_m.len();
-    let done_before = (0..total).filter(|a| opened.committed.contains(&(FILTER_IX, *a as u16))).count();
-    observer.event(&Event::Started { total, done: done_before });
-    let clock = rig.clock.clone();
-    let t0 = clock.now_s();
+    let is_committed = |a: usize| run.committed_keys.contains(&(FILTER_IX, a as u16));
+    let done_before = (0..total).filter(|a| is_committed(*a)).count();
+    let todo: Vec<usize> = (0..total).filter(|a| !is_committed(*a)).collect();
+    run.start(total, done_before, observer);
     let mut instruments = Instruments::new(rig, cfg.max_velocity_m_s, cfg.recovery, control, observer)?;
     let fs = instruments.daq_rate_hz();
     let sweep = excitation(&cfg.sweep, fs)?;
     let deconv = DeconvConfig { sample_rate_hz: fs, ..cfg.deconv };
     let kirkeby = KirkebyConfig { sample_rate_hz: fs, ..cfg.kirkeby };
     let mut results = Vec::new();
-    let mut commits = 0;
-    for (actuator, &site) in sites_m.iter().enumerate() {
-        if opened.committed.contains(&(FILTER_IX, actuator as u16)) {
-            continue;
-        }
+    for actuator in todo {
         if control.stop_requested() {
             break;
         }
-        let result =
-            calibrate_one(&mut instruments, actuator, site, &sweep, (&deconv, &kirkeby), cfg, control, observer)?;
+        let site = sites_m[actuator];
+        let Some(result) =
+            calibrate_one(&mut instruments, actuator, site, &sweep, (&deconv, &kirkeby), cfg, control, observer)?
+        else {
+            break;
+        };
         let records = result.records(actuator, site, fs)?;
-        opened.writer.commit_batch(&records)?;
-        opened.writer.checkpoint()?;
-        commits += 1;
-        let done = done_before + commits;
-        tracing::info!(actuator, deviation_db = result.calibration.flatness.deviation_db(), status = ?result.calibration.status, "actuator committed");
-        observer.event(&Event::Committed {
-            unit: actuator,
-            done,
-            total,
-            snr_db: None,
-            status: result.calibration.status.as_str().to_string(),
-            clock_s: clock.now_s() - t0,
-        });
+        let status = result.calibration.status.as_str();
+        run.commit(&records, actuator, None, status, control, observer)?;
+        tracing::info!(
+            actuator,
+            deviation_db = result.calibration.flatness.deviation_db(),
+            status,
+            "actuator committed"
+        );
         results.push(result.calibration);
-        control.committed(commits);
     }
-    let done = done_before + commits;
-    if done < total {
-        observer.event(&Event::Stopped { done });
-        return Err(RecipeError::Interrupted { committed: done });
-    }
-    observer.event(&Event::Finished { done });
+    run.finish(observer)?;
     Ok(results)
 }
 
 /// One actuator's calibration with the responses to store.
-struct Measured {
+struct ActuatorMeasurement {
     calibration: ActuatorCalibration,
+    /// Acquisitions repeated (gaps, underruns, clipping) over every attempt.
+    acquisition_retries: u32,
     response: Vec<f64>,
     verification: Vec<f64>,
 }
 
-impl Measured {
+impl ActuatorMeasurement {
     fn records(&self, actuator: usize, (x_m, y_m): (f64, f64), fs: f64) -> Result<Vec<IrRecord>, RecipeError> {
-        let retries = self.calibration.attempts.saturating_sub(1);
+        // Every repeat counts: design attempts after the first and repeated acquisitions.
+        let retries = self.calibration.attempts.saturating_sub(1) + self.acquisition_retries;
         let rows: [(u32, &[f64]); 3] = [
             (FILTER_IX, &self.calibration.filter.taps),
             (RESPONSE_IX, &self.response),
@@ -253,13 +251,6 @@ impl Measured {
     }
 }
 
-/// Microseconds since the Unix epoch now (0 if the system clock is before 1970).
-pub(crate) fn now_unix_us() -> i64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| i64::try_from(d.as_micros()).unwrap_or(i64::MAX))
-}
-
 #[allow(clippy::too_many_arguments)] // One call site; the pieces are distinct.
 fn calibrate_one(
     instruments: &mut Instruments<'_>,
@@ -270,17 +261,20 @@ fn calibrate_one(
     cfg: &CalibrationConfig,
     control: &RunControl,
     observer: &mut dyn Observer,
-) -> Result<Measured, RecipeError> {
+) -> Result<Option<ActuatorMeasurement>, RecipeError> {
     let fs = deconv.sample_rate_hz;
-    let mut last: Option<Measured> = None;
+    let mut last: Option<ActuatorMeasurement> = None;
+    let mut acquisition_retries = 0;
     for attempt in 0..cfg.max_attempts.max(1) {
         if attempt > 0 {
             observer.event(&Event::Retry { unit: actuator, attempt, reason: "not flat enough".into() });
         }
         aim(instruments, site, (cfg.seed, actuator as u64, attempt), &cfg.aim, control, observer)?;
         // The response: the raw sweep, with a tail for the response to ring out.
-        let raw = Playback::new(sweep, 1, deconv.ir_len, None)?;
-        let acq = measure(instruments, &raw, actuator, control, observer)?;
+        let raw = DrivePlayback::new(sweep, 1, deconv.ir_len, None)?;
+        let Some(acq) = measure(instruments, &raw, actuator, &mut acquisition_retries, control, observer)? else {
+            return Ok(None);
+        };
         let response = to_response(&acq, deconv, instruments)?;
         let mut in_band = in_band_magnitudes(&response, fs, cfg.check_band_hz)?;
         let reference_gain = median(&mut in_band).filter(|g| *g > 0.0).ok_or_else(|| {
@@ -302,8 +296,11 @@ fn calibrate_one(
         let filter = equaliser.filter;
         // Verification: the sweep through the filter; the loopback carries the modelling delay, so the result is the
         // compensated response about time 0.
-        let compensated = Playback::new(sweep, 1, deconv.ir_len + filter.taps.len(), Some(&filter))?;
-        let acq = measure(instruments, &compensated, actuator, control, observer)?;
+        let compensated = DrivePlayback::new(sweep, 1, deconv.ir_len + filter.taps.len(), Some(&filter))?;
+        let Some(acq) = measure(instruments, &compensated, actuator, &mut acquisition_retries, control, observer)?
+        else {
+            return Ok(None);
+        };
         let verification = to_response(&acq, deconv, instruments)?;
         let flat = smoothed_flatness(&verification, fs, cfg.check_band_hz, cfg.smoothing_fraction)?;
         let pass = flat.deviation_db() <= cfg.max_deviation_db;
@@ -317,17 +314,18 @@ fn calibrate_one(
             "verified"
         );
         let status = if pass { Status::Valid } else { Status::Failed };
-        let measured = Measured {
+        let measured = ActuatorMeasurement {
             calibration: ActuatorCalibration { actuator, filter, flatness: flat, attempts: attempt + 1, status },
+            acquisition_retries,
             response,
             verification,
         };
         if pass {
-            return Ok(measured);
+            return Ok(Some(measured));
         }
         last = Some(measured);
     }
-    last.ok_or_else(|| RecipeError::Config("no calibration attempt was made".into()))
+    last.map(Some).ok_or_else(|| RecipeError::Internal("no calibration attempt was made".into()))
 }
 
 /// Magnitudes of `ir`'s spectrum at the bins inside `band_hz`.
@@ -342,42 +340,39 @@ fn in_band_magnitudes(ir: &[f64], fs: f64, band_hz: (f64, f64)) -> Result<Vec<f6
         .collect())
 }
 
-/// Plays `playback` on `actuator`'s channel and records it whole and unclipped: gaps and underruns are repeated,
-/// clipping widens the velocity range (bounded).
-pub(crate) fn measure(
+/// Plays `playback` on `actuator`'s channel and records it whole, with the engine's retry policy at
+/// [`MEASURE_ATTEMPTS`] (gaps and underruns repeated, clipping widening the velocity range); adds the repeats to
+/// `retries`. A recording still clipped at the widest range is kept (the verification judges it); `None` when
+/// abandoned on request.
+///
+/// # Errors
+/// [`RecipeError::Device`] when every recording had a gap; device errors as [`RecipeError`] says.
+fn measure(
     instruments: &mut Instruments<'_>,
-    playback: &Playback,
+    playback: &DrivePlayback,
     actuator: usize,
+    retries: &mut u32,
     control: &RunControl,
     observer: &mut dyn Observer,
-) -> Result<Acquisition, RecipeError> {
-    const MAX_REPEATS: u32 = 8;
+) -> Result<Option<Acquisition>, RecipeError> {
     let fs = instruments.daq_rate_hz();
     let buffers = playback.audio_buffers(&instruments.rig.wiring, actuator, fs)?;
     let record = record_samples(playback, fs);
-    for repeat in 0..MAX_REPEATS {
-        let acq = instruments.with_recovery(control, observer, |i| i.acquire(&buffers, record))?;
-        if !acq.is_whole() {
-            observer.event(&Event::Retry { unit: actuator, attempt: repeat + 1, reason: "gap or underrun".into() });
-            continue;
-        }
-        if acq.clipped {
-            let grew = instruments.with_recovery(control, observer, Instruments::widen_range)?;
-            if grew {
-                observer.event(&Event::Retry { unit: actuator, attempt: repeat + 1, reason: "clipped".into() });
-                continue;
-            }
-        }
-        return Ok(acq);
+    let policy = RetryPolicy { max_attempts: MEASURE_ATTEMPTS };
+    let Some(acquired) = acquire(instruments, &buffers, record, policy, actuator, control, observer)? else {
+        return Ok(None);
+    };
+    *retries += acquired.attempts - 1;
+    if acquired.problem == Some(AcquisitionProblem::Gap) {
+        return Err(RecipeError::Device(format!(
+            "actuator {actuator}: {MEASURE_ATTEMPTS} recordings in a row had gaps"
+        )));
     }
-    Err(RecipeError::Config(format!("actuator {actuator}: {MAX_REPEATS} recordings in a row had gaps or clipped")))
+    Ok(Some(acquired.acquisition))
 }
 
-/// Samples to record for `playback`: all of it, plus 0.1 s for the audio interface's output latency.
-pub(crate) fn record_samples(playback: &Playback, fs: f64) -> usize {
-    const LATENCY_MARGIN_S: f64 = 0.1;
-    playback.drive.len() + (LATENCY_MARGIN_S * fs).ceil() as usize
-}
+/// Acquisitions per calibration measurement at most (the first included).
+pub const MEASURE_ATTEMPTS: u32 = 8;
 
 /// The response, m/s per full scale, from a recording: velocity (V times the range's m/s per V) over loopback (V
 /// over the loopback's V per full scale).
@@ -387,7 +382,7 @@ fn to_response(
     instruments: &Instruments<'_>,
 ) -> Result<Vec<f64>, RecipeError> {
     let volts_per_fs = instruments.rig.wiring.loopback_volts_per_full_scale;
-    let ir = deconvolve_with_reference(&acq.velocity_v, &acq.loopback_v, deconv)?;
+    let ir = deconvolve_with_reference(&acq.recording.velocity_v, &acq.recording.loopback_v, deconv)?;
     Ok(ir.iter().map(|v| v * acq.scale.m_s_per_v * volts_per_fs).collect())
 }
 

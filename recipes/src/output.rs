@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use metaplate_store::{BATCH_DIR, DatasetMeta, DatasetWriter, IfExists, MANIFEST_FILE, SceneId};
 
-use crate::control::RunControl;
 use crate::error::RecipeError;
+use crate::events::RunControl;
 
 /// The output of a run: a dataset directory and how to treat what is already there.
 #[derive(Debug, Clone, PartialEq, Eq)]

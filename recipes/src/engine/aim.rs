@@ -2,9 +2,9 @@
 
 use metaplate_core::rng::{mix64, unit_open};
 
-use crate::control::{Observer, RunControl};
+use crate::engine::session::Instruments;
 use crate::error::RecipeError;
-use crate::instruments::Instruments;
+use crate::events::{Observer, RunControl};
 
 /// How to aim: the signal level wanted and how far and how often to nudge for it.
 ///

@@ -1,0 +1,98 @@
+//! The scan's processing of a point's recordings, on the worker thread: deconvolution (or a simultaneous
+//! protocol's decode) and the quality gates, into outcomes the plan settles.
+
+use metaplate_dsp::pipeline::PreparedLayout;
+
+use crate::engine::aim::Aimed;
+use crate::engine::session::Acquisition;
+use crate::plans::scan::points::{Outcome, Problem};
+use crate::plans::scan::simultaneous::Simultaneous;
+
+/// One acquisition sent for processing.
+pub(crate) struct Channel {
+    pub actuator: usize,
+    pub acquisition: Acquisition,
+    /// What the retry policy left wrong with it.
+    pub problem: Option<Problem>,
+}
+
+/// A point's recordings, sent to the worker thread.
+pub(crate) struct Job {
+    pub point: usize,
+    pub aimed: Aimed,
+    pub work: Work,
+}
+
+/// What a job carries to the worker.
+pub(crate) enum Work {
+    /// Sequential: one acquisition per pending actuator.
+    Channels(Vec<Channel>),
+    /// Simultaneous: one acquisition per shot, for the pending actuators; the worst acquisition problem.
+    Shots { pending: Vec<usize>, acquisitions: Vec<Acquisition>, problem: Option<Problem> },
+    /// Already processed (adaptive protocols decide between rounds, so they decode as they acquire).
+    Done(Vec<Outcome>),
+}
+
+/// A job processed: what the plan settles.
+pub(crate) struct Processed {
+    pub point: usize,
+    pub aimed: Aimed,
+    /// Per channel: actuator, response (m/s per full scale) and SNR when processing succeeded, problem if any.
+    pub outcomes: Vec<Outcome>,
+}
+
+/// The scan's quality gates, and the loopback's volts per full scale (to convert responses to m/s per full scale).
+pub(crate) struct Gates {
+    pub min_snr_db: f64,
+    pub max_drift_ppm: f64,
+    pub volts_per_fs: f64,
+}
+
+/// Deconvolves and gates every channel of a job (on the worker thread).
+pub(crate) fn process(
+    job: Job,
+    prepared: &PreparedLayout,
+    simultaneous: Option<&Simultaneous>,
+    gates: &Gates,
+) -> Processed {
+    let outcomes = match (job.work, simultaneous) {
+        (Work::Channels(channels), _) => process_channels(channels, prepared, gates),
+        (Work::Shots { pending, acquisitions, problem }, Some(sim)) => {
+            let decoded = sim.decode(&acquisitions, gates).map(|results| results.into_iter().map(Some).collect());
+            sim.outcomes(&pending, decoded, problem, gates)
+        }
+        (Work::Shots { pending, .. }, None) => {
+            let problem = Problem::Processing("shots without a simultaneous protocol".into());
+            pending.into_iter().map(|a| (a, None, Some(problem.clone()))).collect()
+        }
+        (Work::Done(outcomes), _) => outcomes,
+    };
+    Processed { point: job.point, aimed: job.aimed, outcomes }
+}
+
+/// Deconvolves and gates the channels of a sequential job.
+fn process_channels(channels: Vec<Channel>, prepared: &PreparedLayout, gates: &Gates) -> Vec<Outcome> {
+    channels
+        .into_iter()
+        .map(|ch| {
+            let acq = &ch.acquisition;
+            // The response is kept even when a gate fails: it is committed if no later visit does better.
+            let (result, gate) = match prepared.process_channel(&acq.recording.velocity_v, &acq.recording.loopback_v) {
+                Err(e) => (None, Some(Problem::Processing(e.to_string()))),
+                Ok(r) => {
+                    let to_units = acq.scale.m_s_per_v * gates.volts_per_fs;
+                    let ir: Vec<f64> = r.ir.iter().map(|v| v * to_units).collect();
+                    let gate = if r.drift_ppm.abs() > gates.max_drift_ppm {
+                        Some(Problem::Drift(r.drift_ppm))
+                    } else {
+                        r.snr_db.filter(|s| *s < gates.min_snr_db).map(Problem::LowSnr)
+                    };
+                    (Some((ir, r.snr_db)), gate)
+                }
+            };
+            // An acquisition problem (clipping, a gap) explains a gate failure better than the gate itself.
+            let problem = ch.problem.or(gate);
+            (ch.actuator, result, problem)
+        })
+        .collect()
+}

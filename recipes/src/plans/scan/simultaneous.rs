@@ -1,0 +1,150 @@
+//! A simultaneous protocol (every actuator at once: Hadamard, interleaved) ready to play and decode, and the
+//! coherent average of an adaptive protocol's rounds.
+
+use metaplate_dsp::deconv::DeconvConfig;
+use metaplate_dsp::pipeline::ChannelResult;
+use metaplate_dsp::protocol::Protocol;
+
+use crate::drive::SimultaneousPlayback;
+use crate::engine::session::{Acquisition, Instruments};
+use crate::error::RecipeError;
+use crate::excitation::{Adaptive, ScanProtocol};
+use crate::plans::calibrate::Calibration;
+use crate::plans::scan::points::{Outcome, Problem};
+use crate::plans::scan::processing::Gates;
+
+/// A simultaneous protocol ready to play and decode.
+pub(crate) struct Simultaneous {
+    /// The DSP protocol (decoding at the DAQ rate).
+    protocol: Protocol,
+    /// Deconvolution at the DAQ rate.
+    deconv: DeconvConfig,
+    pub playback: SimultaneousPlayback,
+    pub adaptive: Option<Adaptive>,
+}
+
+impl Simultaneous {
+    pub(crate) fn new(
+        instruments: &Instruments<'_>,
+        protocol: &ScanProtocol,
+        deconv: &DeconvConfig,
+        calibration: Option<&Calibration>,
+    ) -> Result<Self, RecipeError> {
+        let wiring = &instruments.rig.wiring;
+        let fs = instruments.daq_rate_hz();
+        let dsp = protocol.dsp();
+        dsp.validate(wiring.actuator_channels.len(), deconv.ir_len as f64 / fs)?;
+        let fir_len = calibration.map_or(0, |c| c.filters.iter().map(|f| f.taps.len()).max().unwrap_or(0));
+        // The tail holds the last response (ir_len) and the filter's own length, as in the sequential playback.
+        let filters = calibration.map(|c| c.filters.as_slice());
+        let playback = SimultaneousPlayback::new(&dsp, wiring, fs, deconv.ir_len + fir_len, filters)?;
+        Ok(Self { protocol: dsp, deconv: *deconv, playback, adaptive: protocol.adaptive })
+    }
+
+    /// Every actuator's response (m/s per full scale of its compensated drive) and SNR from one round of shots.
+    pub(crate) fn decode(&self, acquisitions: &[Acquisition], gates: &Gates) -> Result<Vec<ChannelResult>, Problem> {
+        // Velocity in m/s per loopback full scale, so that the responses come out in m/s per full scale.
+        let velocities: Vec<Vec<f64>> = acquisitions
+            .iter()
+            .map(|a| a.recording.velocity_v.iter().map(|v| v * a.scale.m_s_per_v * gates.volts_per_fs).collect())
+            .collect();
+        let pairs: Vec<(&[f64], &[f64])> = velocities
+            .iter()
+            .zip(acquisitions)
+            .map(|(v, a)| (v.as_slice(), a.recording.loopback_v.as_slice()))
+            .collect();
+        let mut results = self
+            .protocol
+            .decode(self.playback.response_gain.len(), &pairs, &self.deconv)
+            .map_err(|e| Problem::Processing(e.to_string()))?;
+        for (r, gain) in results.iter_mut().zip(&self.playback.response_gain) {
+            r.ir.iter_mut().for_each(|v| *v *= gain);
+        }
+        Ok(results)
+    }
+
+    /// Outcomes of the pending actuators from decoded results (or why there are none), gated like sequential ones;
+    /// an acquisition problem explains a gate failure better than the gate itself.
+    pub(crate) fn outcomes(
+        &self,
+        pending: &[usize],
+        decoded: Result<Vec<Option<ChannelResult>>, Problem>,
+        problem: Option<Problem>,
+        gates: &Gates,
+    ) -> Vec<Outcome> {
+        pending
+            .iter()
+            .map(|&a| match &decoded {
+                Err(e) => (a, None, problem.clone().or_else(|| Some(e.clone()))),
+                Ok(results) => match results.get(a).cloned().flatten() {
+                    None => (a, None, problem.clone().or(Some(Problem::Processing(format!("no response {a}"))))),
+                    Some(r) => {
+                        let gate = if r.drift_ppm.abs() > gates.max_drift_ppm {
+                            Some(Problem::Drift(r.drift_ppm))
+                        } else {
+                            r.snr_db.filter(|s| *s < gates.min_snr_db).map(Problem::LowSnr)
+                        };
+                        (a, Some((r.ir, r.snr_db)), problem.clone().or(gate))
+                    }
+                },
+            })
+            .collect()
+    }
+}
+
+/// Coherent average of adaptive rounds, with the noise of the average from each round's SNR.
+pub(crate) struct Averager {
+    pub count: usize,
+    /// Per actuator: sum of the responses, and sum of the rounds' noise energies (`None` once a round had none).
+    sums: Vec<(Vec<f64>, Option<f64>)>,
+    drift_ppm: f64,
+}
+
+impl Averager {
+    pub(crate) fn new(actuators: usize) -> Self {
+        Self { count: 0, sums: vec![(Vec::new(), Some(0.0)); actuators], drift_ppm: 0.0 }
+    }
+
+    pub(crate) fn add(&mut self, results: &[ChannelResult]) {
+        self.count += 1;
+        for ((sum, noise), r) in self.sums.iter_mut().zip(results) {
+            sum.resize(r.ir.len(), 0.0);
+            sum.iter_mut().zip(&r.ir).for_each(|(s, v)| *s += v);
+            // A round's noise energy from its SNR: energy / 10^(snr/10).
+            *noise = noise.zip(r.snr_db).map(|(n, snr)| n + energy(&r.ir) / 10f64.powf(snr / 10.0));
+        }
+        self.drift_ppm = self.drift_ppm.max(results.iter().fold(0.0f64, |m, r| m.max(r.drift_ppm.abs())));
+    }
+
+    /// The averaged responses, with the average's SNR: its energy over the mean noise energy divided by the count
+    /// (independent noise averages down by the number of rounds).
+    pub(crate) fn averaged(&self) -> Vec<Option<ChannelResult>> {
+        let n = self.count.max(1) as f64;
+        (0..self.sums.len())
+            .map(|a| {
+                let (sum, _) = &self.sums[a];
+                let ir: Vec<f64> = sum.iter().map(|v| v / n).collect();
+                let snr_db = self.snr_db(&[a]).into_iter().next().flatten();
+                Some(ChannelResult { ir, snr_db, drift_ppm: self.drift_ppm, latency_samples: 0.0 })
+            })
+            .collect()
+    }
+
+    /// SNR of the average for each of `actuators`, dB; `None` where unknown.
+    pub(crate) fn snr_db(&self, actuators: &[usize]) -> Vec<Option<f64>> {
+        let n = self.count.max(1) as f64;
+        actuators
+            .iter()
+            .map(|&a| {
+                let (sum, noise) = self.sums.get(a)?;
+                let signal = energy(sum) / (n * n);
+                let noise = (*noise)? / n / n;
+                (noise > 0.0 && signal > 0.0).then(|| 10.0 * (signal / noise).log10())
+            })
+            .collect()
+    }
+}
+
+fn energy(signal: &[f64]) -> f64 {
+    signal.iter().map(|x| x * x).sum()
+}
