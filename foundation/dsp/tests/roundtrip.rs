@@ -6,7 +6,6 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing; the helpers here are test code.
 
-use metaplate_core::rng::SplitMix64;
 use metaplate_dsp::average::average;
 use metaplate_dsp::band::BandLimit;
 use metaplate_dsp::conv::convolve;
@@ -15,6 +14,9 @@ use metaplate_dsp::fft;
 use metaplate_dsp::pipeline::{RepetitionLayout, process_channel};
 use metaplate_dsp::sweep::{SweepKind, SweepSpec};
 use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
 
 const FS: f64 = 24_000.0;
 
@@ -92,9 +94,10 @@ impl Lab {
         let first = self.latency_samples.ceil() as usize;
         let power = clean_velocity[first..span].iter().map(|v| v * v).sum::<f64>() / (span - first) as f64;
         let noise_sigma = self.snr_db.map_or(0.0, |snr| (power / 10f64.powf(snr / 10.0)).sqrt());
-        let mut rng = SplitMix64::new(self.seed, 0);
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let velocity = if noise_sigma > 0.0 {
-            clean_velocity.iter().map(|v| v + noise_sigma * rng.normal()).collect()
+            let noise = Normal::new(0.0, noise_sigma).unwrap();
+            clean_velocity.iter().map(|v| v + noise.sample(&mut rng)).collect()
         } else {
             clean_velocity.clone()
         };
@@ -104,9 +107,10 @@ impl Lab {
 
 /// A random decaying impulse response: Gaussian samples under an exp(-t / tau) envelope (tau = 50 ms), 0.4 s long.
 fn random_ir(seed: u64) -> Vec<f64> {
-    let mut rng = SplitMix64::new(seed, 0);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let normal = Normal::new(0.0, 1.0).unwrap();
     let tau = 0.05 * FS;
-    (0..(0.4 * FS) as usize).map(|k| 0.01 * rng.normal() * (-(k as f64) / tau).exp()).collect()
+    (0..(0.4 * FS) as usize).map(|k| 0.01 * normal.sample(&mut rng) * (-(k as f64) / tau).exp()).collect()
 }
 
 /// Two damped modes (150 Hz and 480 Hz, 2 % damping), 0.5 s long: the second decays to 1e-4 of its start, the
@@ -381,8 +385,8 @@ proptest! {
         drift_ppm in -300.0f64..300.0,
         repetitions in 2usize..5,
     ) {
-        let mut rng = SplitMix64::new(seed, 0);
-        let ir: Vec<f64> = (0..ir_len).map(|k| (rng.uniform() * 2.0 - 1.0) * (-(k as f64) / tau).exp()).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let ir: Vec<f64> = (0..ir_len).map(|k| rng.random_range(-1.0..1.0) * (-(k as f64) / tau).exp()).collect();
         let (layout, cfg) = short_layout(repetitions);
         let lab = Lab {
             ir,
