@@ -30,7 +30,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
         }
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
-            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), common.seed, common.cache_dir.clone())?;
+            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), common.seed, common.cache.dir())?;
             (plate, rig, Some(lab))
         }
         (None, None) => anyhow::bail!("give --scene or --hardware"),

@@ -58,7 +58,7 @@ impl Plate {
     pub fn resolve(name_or_path: &str) -> anyhow::Result<Self> {
         let scene = Scene::resolve(name_or_path)?;
         scene.validate()?;
-        let id = SceneId { name: scene.name.clone(), hash: format!("fnv1a64:{:016x}", scene.content_hash()) };
+        let id = scene.id();
         Ok(Self { scene, id })
     }
 

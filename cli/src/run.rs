@@ -74,10 +74,9 @@ pub struct RunArgs {
     /// the last one is `finished` or `stopped`.
     #[arg(long)]
     pub json: bool,
-    /// Mock lab only: directory caching the plate's Green's functions (keyed by scene and request), so that later
-    /// runs start at once.
-    #[arg(long)]
-    pub cache_dir: Option<PathBuf>,
+    /// Mock lab only: where the plate's Green's functions are cached.
+    #[command(flatten)]
+    pub cache: crate::cache::CacheArgs,
 }
 
 impl RunArgs {

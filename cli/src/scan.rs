@@ -61,7 +61,7 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
             let plan = plan(&plate, args.grid)?;
-            let (lab, rig) = rig::mock_rig(&plate, plan.points.clone(), common.seed, common.cache_dir.clone())?;
+            let (lab, rig) = rig::mock_rig(&plate, plan.points.clone(), common.seed, common.cache.dir())?;
             (plate, rig, Some(lab), plan)
         }
         (None, None) => anyhow::bail!("give --scene or --hardware"),

@@ -14,8 +14,7 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use metaplate_store::Dataset;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use metaplate_core::rng::SplitMix64;
 
 /// The scan under test: 4 x 3 points of the metamaterial grid (all on the plate), the quick protocol, seed 5.
 const SCAN: &[&str] =
@@ -87,7 +86,7 @@ fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
     eprintln!("uninterrupted: {points} points in {scan_time:?} after start-up");
 
     let dir = tmp.path().join("crashed");
-    let mut rng = ChaCha8Rng::seed_from_u64(0x6b69_6c6c);
+    let mut rng = SplitMix64::new(0x6b69_6c6c, 0);
     let (mut kills, mut inside_commit, mut inside_point, mut runs) = (0, 0, 0, 0);
     let per_point = scan_time / points as u32;
     loop {
@@ -110,15 +109,15 @@ fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
         let mut after_start = false;
         let kill_at = if kills >= KILLS {
             None
-        } else if rng.random_bool(0.2) {
+        } else if rng.uniform() < 0.2 {
             // Anywhere in start-up: opening the dataset (resume, quarantine), the lab, the instruments.
-            Some(spawned + Duration::from_secs_f64(rng.random_range(0.0..0.6)))
+            Some(spawned + Duration::from_secs_f64(0.6 * rng.uniform()))
         } else {
             // After the scan started, or after its first commit (so that the run makes progress), within one
             // point's time: an acquisition, processing, or the next commit.
-            let marker = if rng.random_bool(0.25) { "\"committed\"" } else { "\"started\"" };
+            let marker = if rng.uniform() < 0.25 { "\"committed\"" } else { "\"started\"" };
             let seen = rx.iter().find(|l| l.contains(marker) || l.contains("\"finished\""));
-            let delay = per_point.mul_f64(rng.random_range(0.0..1.0));
+            let delay = per_point.mul_f64(rng.uniform());
             after_start = true;
             seen.filter(|l| !l.contains("\"finished\"")).map(|_| Instant::now() + delay)
         };
@@ -203,7 +202,7 @@ fn calibrate_killed_inside_actuators_then_resumed_equals_an_uninterrupted_run() 
     eprintln!("uninterrupted: {units} actuators in {calibration_time:?} after start-up");
 
     let dir = tmp.path().join("crashed");
-    let mut rng = ChaCha8Rng::seed_from_u64(0x6361_6c69);
+    let mut rng = SplitMix64::new(0x6361_6c69, 0);
     let (mut kills, mut inside_unit, mut runs) = (0, 0, 0);
     loop {
         runs += 1;
@@ -216,10 +215,10 @@ fn calibrate_killed_inside_actuators_then_resumed_equals_an_uninterrupted_run() 
         if kills < CALIBRATE_KILLS {
             // Half-way-ish through an actuator: the first of this run (after `started`) or the second (after the
             // first `committed`, so that the run makes progress), well clear of both ends.
-            let marker = if rng.random_bool(0.3) { "\"started\"" } else { "\"committed\"" };
+            let marker = if rng.uniform() < 0.3 { "\"started\"" } else { "\"committed\"" };
             let seen = lines.by_ref().find(|l| l.contains(marker) || l.contains("\"finished\""));
             if seen.is_some_and(|l| !l.contains("\"finished\"")) {
-                std::thread::sleep(per_unit.mul_f64(rng.random_range(0.2..0.8)));
+                std::thread::sleep(per_unit.mul_f64(0.2 + (0.8 - 0.2) * rng.uniform()));
                 if child.try_wait().unwrap().is_none() {
                     child.kill().unwrap();
                     killed = true;

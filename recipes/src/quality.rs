@@ -1,4 +1,4 @@
-//! Quality measures and gates shared by the recipes.
+//! The calibration's flatness measure (the error measure and the median live in dsp: `accuracy`, `stats`).
 
 use metaplate_dsp::DspError;
 
@@ -40,44 +40,9 @@ pub fn smoothed_flatness(
     let levels = metaplate_dsp::smooth::smoothed_levels_db(ir, sample_rate_hz, fraction, band_hz)?;
     let mut levels_db: Vec<f64> = levels.iter().map(|(_, l)| *l).collect();
     // Not empty: smoothed_levels_db refuses a band without bins.
-    let median_db = median(&mut levels_db).unwrap_or(0.0);
+    let median_db = metaplate_dsp::stats::median(&mut levels_db).unwrap_or(0.0);
     let (min, max) = levels_db.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
     Ok(Flatness { median_db, min_db: min - median_db, max_db: max - median_db })
-}
-
-/// Relative error of `measured` against `reference`, dB: `10 log10(sum (m - r)^2 / sum r^2)` over their samples
-/// (by Parseval, the same as over their spectra). -20 dB is a 10 % error in amplitude; 0 dB an error as large as
-/// the reference.
-///
-/// Valid range: finite signals of equal, nonzero length; a reference with some energy. The result is finite: a
-/// measurement equal to the reference returns -400 dB (far below anything f64 rounding resolves).
-///
-/// # Errors
-/// [`DspError::Empty`] / [`DspError::NonFinite`] for either signal; [`DspError::LengthMismatch`] for different
-/// lengths; [`DspError::InvalidParameter`] for an all-zero reference.
-pub fn relative_error_db(measured: &[f64], reference: &[f64]) -> Result<f64, DspError> {
-    metaplate_dsp::error::check_signal("measured", measured)?;
-    metaplate_dsp::error::check_signal("reference", reference)?;
-    if measured.len() != reference.len() {
-        return Err(DspError::LengthMismatch { what: "measured and reference", a: measured.len(), b: reference.len() });
-    }
-    let energy: f64 = reference.iter().map(|r| r * r).sum();
-    if energy <= 0.0 {
-        return Err(DspError::InvalidParameter { name: "reference", reason: "is all zero".into() });
-    }
-    let error: f64 = measured.iter().zip(reference).map(|(m, r)| (m - r) * (m - r)).sum();
-    // -400 dB stands for "identical": below anything f64 rounding can resolve, and finite.
-    Ok((10.0 * (error / energy).log10()).max(-400.0))
-}
-
-/// Median of finite values (sorts in place); `None` for an empty slice. Even counts average the middle two.
-pub fn median(values: &mut [f64]) -> Option<f64> {
-    if values.is_empty() {
-        return None;
-    }
-    values.sort_unstable_by(f64::total_cmp);
-    let mid = values.len() / 2;
-    Some(if values.len().is_multiple_of(2) { (values[mid - 1] + values[mid]) / 2.0 } else { values[mid] })
 }
 
 #[cfg(test)]
@@ -104,27 +69,5 @@ mod tests {
         assert!(smoothed_flatness(&[1.0, 0.5], 24_000.0, (100.0, 101.0), 3.0).is_err(), "no bin in the band");
         assert!(smoothed_flatness(&[], 24_000.0, (0.0, 1.0), 3.0).is_err());
         assert!(smoothed_flatness(&impulse, 24_000.0, (100.0, 5000.0), 0.5).is_err(), "fraction below 1");
-    }
-
-    #[test]
-    fn relative_error_of_scaled_identical_and_bad_inputs() {
-        let r = [1.0, -2.0, 0.5, 0.0];
-        // m = 1.1 r: error energy 0.01 of the reference's: -20 dB up to rounding.
-        let m: Vec<f64> = r.iter().map(|v| 1.1 * v).collect();
-        assert!((relative_error_db(&m, &r).unwrap() + 20.0).abs() < 1e-9);
-        // m = 0: 0 dB exactly; identical: the -400 dB floor.
-        assert!(relative_error_db(&[0.0; 4], &r).unwrap().abs() < 1e-12);
-        assert_eq!(relative_error_db(&r, &r).unwrap(), -400.0);
-        assert!(relative_error_db(&r, &[0.0; 4]).is_err());
-        assert!(relative_error_db(&r[..3], &r).is_err());
-        assert!(relative_error_db(&[], &[]).is_err());
-        assert!(relative_error_db(&[f64::NAN; 4], &r).is_err());
-    }
-
-    #[test]
-    fn median_of_odd_even_and_empty() {
-        assert_eq!(median(&mut [3.0, 1.0, 2.0]), Some(2.0));
-        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), Some(2.5));
-        assert_eq!(median(&mut []), None);
     }
 }

@@ -8,7 +8,7 @@ use metaplate_core::scene::Scene;
 use metaplate_lab::{ERROR_BAND_HZ, LabOptions, MockLab};
 use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, ScanSummary, scan};
 use metaplate_recipes::{Event, Observer, Output, RunControl};
-use metaplate_store::{Dataset, SceneId, Status};
+use metaplate_store::{Dataset, Status};
 
 /// Runs `protocol` on an `nx` x `ny` subset of the metamaterial scene; returns the sorted errors (dB), the rig-clock
 /// seconds per point, the summary and the rows' statuses.
@@ -21,7 +21,7 @@ fn run(protocol: &str, nx: usize, ny: usize) -> (Vec<f64>, f64, ScanSummary, Vec
     let dir = tempfile::tempdir().unwrap();
     let out = Output {
         dir: dir.path().to_path_buf(),
-        scene: SceneId { name: scene.name.clone(), hash: format!("fnv1a64:{:016x}", scene.content_hash()) },
+        scene: scene.id(),
         software_version: "test".into(),
         resume: false,
         force: false,

@@ -168,11 +168,11 @@ fn flattening_gain(compensated: &[f64], n: usize, cfg: &EqualiserConfig, level: 
     Ok(position.iter().map(|x| (0..nodes).map(|i| g[i] * hat(i, *x)).sum()).collect())
 }
 
-/// Median of the levels (the upper middle for an even count); `levels` is non-empty (band_levels_db's guarantee).
+/// Median of the levels, dB ([`crate::stats::median`]); `levels` is non-empty and finite (band_levels_db's
+/// guarantee), else 0.
 fn median_level_db(levels: &[(f64, f64)]) -> f64 {
-    let mut sorted: Vec<f64> = levels.iter().map(|(_, l)| *l).collect();
-    sorted.sort_by(f64::total_cmp);
-    sorted.get(sorted.len() / 2).copied().unwrap_or(0.0)
+    let mut values: Vec<f64> = levels.iter().map(|(_, l)| *l).collect();
+    crate::stats::median(&mut values).unwrap_or(0.0)
 }
 
 #[cfg(test)]

@@ -24,6 +24,7 @@ pub mod pipeline;
 pub mod protocol;
 pub mod resample;
 pub mod smooth;
+pub mod stats;
 pub mod sweep;
 pub mod window;
 

@@ -11,7 +11,7 @@ use crate::engine::acquire::{RetryPolicy, acquire, record_samples};
 use crate::engine::session::Instruments;
 use crate::error::RecipeError;
 use crate::events::{Event, Observer, RunControl};
-use crate::quality::relative_error_db;
+use metaplate_dsp::accuracy::relative_error_db;
 
 /// What the reference check re-measures and how it judges it: the narrow part of a scan's configuration it needs.
 #[derive(Debug, Clone, Copy)]

@@ -28,7 +28,9 @@ use crate::engine::session::{Acquisition, Instruments, RecoveryPolicy};
 use crate::error::RecipeError;
 use crate::events::{Event, Observer, RunControl};
 use crate::output::Output;
-use crate::quality::{Flatness, median, smoothed_flatness};
+use metaplate_dsp::stats::median;
+
+use crate::quality::{Flatness, smoothed_flatness};
 
 /// Recipe name in the manifest.
 pub const RECIPE: &str = "calibrate";

@@ -10,7 +10,7 @@ use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, ScanSummary, scan};
 use metaplate_recipes::{Event, Observer, Output, RecipeError, RunControl};
-use metaplate_store::{Dataset, SceneId};
+use metaplate_store::Dataset;
 
 /// Compared band, Hz: inside the deconvolution band's flat part (62..625 Hz, skirts outside it) and the sweep.
 pub const BAND_HZ: (f64, f64) = (80.0, 600.0);
@@ -36,13 +36,7 @@ pub fn lab_and_plan(scene: &Scene, nx: usize, ny: usize) -> (MockLab, ScanPlan) 
 
 /// The output of a run of `scene` into `dir`.
 pub fn output(dir: &Path, scene: &Scene, resume: bool) -> Output {
-    Output {
-        dir: dir.to_path_buf(),
-        scene: SceneId { name: scene.name.clone(), hash: format!("fnv1a64:{:016x}", scene.content_hash()) },
-        software_version: "test".into(),
-        resume,
-        force: false,
-    }
+    Output { dir: dir.to_path_buf(), scene: scene.id(), software_version: "test".into(), resume, force: false }
 }
 
 /// The first `n` points of `plan` (in its order).

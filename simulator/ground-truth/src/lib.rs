@@ -288,6 +288,5 @@ fn median_gain(spectrum: &[Complex64], freqs: &[f64], band_hz: (f64, f64)) -> Op
         .filter(|(_, f)| (band_hz.0..=band_hz.1).contains(*f))
         .map(|(s, _)| s.norm())
         .collect();
-    gains.sort_unstable_by(f64::total_cmp);
-    gains.get(gains.len() / 2).copied().filter(|g| *g > 0.0 && g.is_finite())
+    metaplate_dsp::stats::median(&mut gains).filter(|g| *g > 0.0)
 }

@@ -1,6 +1,6 @@
 //! The full paper protocol on the built-in metamaterial scene in fast-forward: a by-hand benchmark, not a test.
 //!
-//! `cargo run --release -p metaplate-recipes --example paper_scan -- [--points N] [--protocol NAME]`
+//! `cargo bench -p metaplate-recipes --bench paper_scan -- [--points N] [--protocol NAME]`
 //!
 //! Scans every measurable point of the full grid (or the first N of its serpentine path), uncalibrated, with
 //! `--protocol` (default `paper`: 3 s sweeps x 5 per actuator), into a temporary directory, and prints: wall time,
@@ -16,7 +16,6 @@ use metaplate_core::scene::Scene;
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, scan};
 use metaplate_recipes::{Event, Output, RunControl};
-use metaplate_store::SceneId;
 
 struct Args {
     points: Option<usize>,
@@ -25,7 +24,8 @@ struct Args {
 
 fn parse_args() -> Result<Args, Box<dyn Error>> {
     let mut args = Args { points: None, protocol: "paper".into() };
-    let mut it = std::env::args().skip(1);
+    // `cargo bench` passes `--bench` to a harness-less bench: not ours to parse.
+    let mut it = std::env::args().skip(1).filter(|a| a != "--bench");
     while let Some(a) = it.next() {
         match a.as_str() {
             "--points" => args.points = Some(it.next().ok_or("--points needs a number")?.parse()?),
@@ -57,7 +57,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let dir = tempfile::tempdir()?;
     let mut out = Output {
         dir: dir.path().to_path_buf(),
-        scene: SceneId { name: scene.name.clone(), hash: format!("fnv1a64:{:016x}", scene.content_hash()) },
+        scene: scene.id(),
         software_version: env!("CARGO_PKG_VERSION").into(),
         resume: false,
         force: false,
