@@ -1,9 +1,7 @@
 //! Fault injection: a schedule of faults keyed by IN-transfer number, written by hand or drawn from a seed.
 
-use metaplate_core::rng::SplitMix64;
-
-/// Stream of the seeded fault schedule's generator (see [`SplitMix64::new`]).
-const FAULT_STREAM: u64 = 0x6661_756c_7473; // "faults"
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// A fault the mock transport injects when the host attempts a given IN transfer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,20 +67,19 @@ impl FaultSchedule {
     /// Draws faults for IN transfers `0..horizon_reads` from `rates`, deterministically from `seed` (the same
     /// seed and rates always give the same schedule).
     pub fn seeded(seed: u64, rates: FaultRates, horizon_reads: u64) -> Self {
-        let mut rng = SplitMix64::new(seed, FAULT_STREAM);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let stall = probability(rates.stall);
         let disconnect = probability(rates.disconnect);
         let overrun = probability(rates.overrun);
         let mut events = Vec::new();
         for read_index in 0..horizon_reads {
-            let u = rng.uniform();
+            let u: f64 = rng.random();
             let fault = if u < stall {
-                // At most `max_stall_reads`, a u32: the cast is exact.
-                Fault::Stall { reads: rng.in_range(1, u64::from(rates.max_stall_reads.max(1))) as u32 }
+                Fault::Stall { reads: rng.random_range(1..=rates.max_stall_reads.max(1)) }
             } else if u < stall + disconnect {
                 Fault::Disconnect
             } else if u < stall + disconnect + overrun {
-                Fault::Overrun { packets: rng.in_range(1, 4) as u32 }
+                Fault::Overrun { packets: rng.random_range(1..=4) }
             } else {
                 continue;
             };
