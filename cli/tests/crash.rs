@@ -13,8 +13,8 @@ use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use metaplate_store::Dataset;
 use metaplate_core::rng::SplitMix64;
+use metaplate_store::Dataset;
 
 /// The scan under test: 4 x 3 points of the metamaterial grid (all on the plate), the quick protocol, seed 5.
 const SCAN: &[&str] =

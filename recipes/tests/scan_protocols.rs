@@ -5,7 +5,8 @@
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
 use metaplate_core::scene::Scene;
-use metaplate_lab::{ERROR_BAND_HZ, LabOptions, MockLab};
+use metaplate_dsp::accuracy::ERROR_BAND_HZ;
+use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, ScanSummary, scan};
 use metaplate_recipes::{Event, Observer, Output, RunControl};
 use metaplate_store::{Dataset, Status};

@@ -12,8 +12,8 @@ use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, ScanSummary, s
 use metaplate_recipes::{Event, Observer, Output, RecipeError, RunControl};
 use metaplate_store::Dataset;
 
-/// Compared band, Hz: inside the deconvolution band's flat part (62..625 Hz, skirts outside it) and the sweep.
-pub const BAND_HZ: (f64, f64) = (80.0, 600.0);
+/// Compared band, Hz: the suite's one Green's-function error band.
+pub use metaplate_dsp::accuracy::ERROR_BAND_HZ as BAND_HZ;
 
 /// The built-in metamaterial scene (its random dropouts are keyed by the measurement, so runs reproduce).
 pub fn metamaterial() -> Scene {
