@@ -25,13 +25,14 @@ use indicatif::ProgressBar;
 use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
 use metaplate_dsp::accuracy::ERROR_BAND_HZ;
+use metaplate_dsp::excitation::ExcitationProtocol;
 use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_plate::ModelOptions;
 use metaplate_recipes::calibrate::ActuatorCalibration;
 use metaplate_recipes::{
-    Calibration, CalibrationConfig, Event, Observer, Output, RunControl, ScanConfig, ScanPlan, ScanProtocol,
-    ScanSummary, calibrate, scan,
+    Calibration, CalibrationConfig, Event, Observer, Output, RunControl, ScanConfig, ScanPlan, ScanSummary, calibrate,
+    scan,
 };
 use metaplate_store::Dataset;
 use serde_json::{Value, json};
@@ -86,7 +87,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         (None, true) => None,
         (None, false) => Some(DEFAULT_GRID),
     };
-    let protocol = ScanProtocol::by_name(if args.full { "paper" } else { "quick" })?;
+    let protocol = ExcitationProtocol::by_name(if args.full { "paper" } else { "quick" })?;
     let mut plates = serde_json::Map::new();
     for name in ["metamaterial", "homogeneous"] {
         let scene = Scene::builtin(name)?;
@@ -114,7 +115,7 @@ fn run_plate(
     scene: &Scene,
     dir: &Path,
     subset: Option<(usize, usize)>,
-    protocol: &ScanProtocol,
+    protocol: &ExcitationProtocol,
     args: &DemoArgs,
 ) -> anyhow::Result<Value> {
     let name = scene.name.clone();

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use metaplate_core::grid::GridSubset;
-use metaplate_recipes::excitation::NAMES as PROTOCOL_NAMES;
-use metaplate_recipes::{Calibration, RunControl, ScanConfig, ScanPlan, ScanProtocol, scan};
+use metaplate_dsp::excitation::{ExcitationProtocol, NAMES as PROTOCOL_NAMES};
+use metaplate_recipes::{Calibration, RunControl, ScanConfig, ScanPlan, scan};
 
 use crate::rig::{self, Plate};
 use crate::run::{self, Reporter, RunArgs};
@@ -42,7 +42,7 @@ pub struct ScanArgs {
     /// point.
     #[arg(long)]
     pub grid: Option<GridSubset>,
-    /// Excitation protocol (the list below is the recipes' registry).
+    /// Excitation protocol (the list below is the excitation-protocol registry).
     #[arg(long, default_value = "paper", long_help = protocol_help())]
     pub protocol: String,
 }
@@ -50,7 +50,7 @@ pub struct ScanArgs {
 /// Runs `metaplate scan`.
 pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     let common = &args.run;
-    let protocol = ScanProtocol::by_name(&args.protocol)?;
+    let protocol = ExcitationProtocol::by_name(&args.protocol)?;
     run::init_log(&common.out, "scan")?;
     let (plate, mut rig, _lab, plan) = match (&common.source.scene, &common.source.hardware) {
         (_, Some(file)) => {
@@ -99,7 +99,8 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The `--protocol` help: every name the recipes' registry knows, with what it plays.
+/// The `--protocol` help: every name of the excitation-protocol registry (`metaplate_dsp::excitation::NAMES`),
+/// with what it plays.
 pub fn protocol_help() -> String {
     let names: Vec<String> = PROTOCOL_NAMES.iter().map(|(name, what)| format!("  {name}: {what}")).collect();
     format!("Excitation protocol, one of:\n{}", names.join("\n"))

@@ -21,8 +21,9 @@ use metaplate_control::PropagationMatrices;
 use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
 use metaplate_dsp::accuracy::ERROR_BAND_HZ;
+use metaplate_dsp::excitation::ExcitationProtocol;
 use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, scan};
+use metaplate_recipes::scan::{ScanConfig, ScanPlan, scan};
 use metaplate_recipes::{Output, RunControl, Silent};
 use metaplate_store::Dataset;
 use serde_json::{Value, json};
@@ -79,8 +80,8 @@ pub fn run(args: &TradeoffArgs) -> anyhow::Result<()> {
     let mask = scene.grid_mask();
     let full_points = mask.iter().filter(|m| **m).count();
     let plan = ScanPlan::new(scene.grid, &mask, Some((nx, ny)))?;
-    let protocols: Vec<ScanProtocol> =
-        args.protocols.split(',').map(|n| ScanProtocol::by_name(n.trim())).collect::<Result<_, _>>()?;
+    let protocols: Vec<ExcitationProtocol> =
+        args.protocols.split(',').map(|n| ExcitationProtocol::by_name(n.trim())).collect::<Result<_, _>>()?;
     if protocols.is_empty() {
         bail!("no protocol given");
     }
@@ -139,7 +140,7 @@ fn measure(
     lab: &MockLab,
     scene: &Scene,
     plan: &ScanPlan,
-    protocol: ScanProtocol,
+    protocol: ExcitationProtocol,
     seed: u64,
     full_points: usize,
 ) -> anyhow::Result<ProtocolTrade> {

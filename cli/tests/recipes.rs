@@ -222,9 +222,9 @@ fn a_scan_that_finishes_with_flagged_rows_exits_3_and_the_codes_are_in_the_help(
         let help = text(&help.stdout);
         assert!(help.contains("Exit codes: 0 finished") && help.contains("130 stopped"), "{help}");
     }
-    // The protocol names come from the recipes' registry.
+    // The protocol names come from the excitation-protocol registry.
     let help = text(&run(&["scan".to_string(), "--help".to_string()], cache).stdout);
-    for (name, _) in metaplate_recipes::excitation::NAMES {
+    for (name, _) in metaplate_dsp::excitation::NAMES {
         assert!(help.contains(name), "{name} missing from: {help}");
     }
 }

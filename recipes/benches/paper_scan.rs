@@ -13,8 +13,9 @@ use std::error::Error;
 use std::time::Instant;
 
 use metaplate_core::scene::Scene;
+use metaplate_dsp::excitation::ExcitationProtocol;
 use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, scan};
+use metaplate_recipes::scan::{ScanConfig, ScanPlan, scan};
 use metaplate_recipes::{Event, Output, RunControl};
 
 struct Args {
@@ -43,7 +44,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     if let Some(n) = args.points {
         plan.points.truncate(n.max(1));
     }
-    let cfg = ScanConfig { protocol: ScanProtocol::by_name(&args.protocol)?, seed: 1, ..ScanConfig::default() };
+    let cfg = ScanConfig { protocol: ExcitationProtocol::by_name(&args.protocol)?, seed: 1, ..ScanConfig::default() };
     let cache = std::env::temp_dir().join("metaplate-greens");
     let options = LabOptions { points: Some(plan.points.clone()), cache_dir: Some(cache), ..LabOptions::default() };
     let lab_started = Instant::now();

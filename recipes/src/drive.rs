@@ -6,8 +6,8 @@
 //! whatever the conversion does to one it does to the other and the reference division cancels it.
 
 use metaplate_core::rig::Wiring;
+use metaplate_dsp::excitation::{ExcitationProtocol, Shot};
 use metaplate_dsp::kirkeby::KirkebyFilter;
-use metaplate_dsp::protocol::{Protocol, Shot};
 use metaplate_dsp::resample::Interpolator;
 use metaplate_dsp::sweep::SweepSpec;
 
@@ -183,7 +183,7 @@ impl SimultaneousPlayback {
     /// [`RecipeError::Config`] for a protocol outside that range, the wrong number of filters, or rates out of
     /// range; [`RecipeError::Dsp`] from the protocol, the filters or the interpolator.
     pub fn new(
-        protocol: &Protocol,
+        protocol: &ExcitationProtocol,
         wiring: &Wiring,
         daq_rate_hz: f64,
         tail_samples: usize,

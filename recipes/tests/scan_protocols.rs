@@ -6,8 +6,9 @@
 
 use metaplate_core::scene::Scene;
 use metaplate_dsp::accuracy::ERROR_BAND_HZ;
+use metaplate_dsp::excitation::ExcitationProtocol;
 use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, ScanSummary, scan};
+use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanSummary, scan};
 use metaplate_recipes::{Event, Observer, Output, RunControl};
 use metaplate_store::{Dataset, Status};
 
@@ -27,7 +28,7 @@ fn run(protocol: &str, nx: usize, ny: usize) -> (Vec<f64>, f64, ScanSummary, Vec
         resume: false,
         force: false,
     };
-    let cfg = ScanConfig { protocol: ScanProtocol::by_name(protocol).unwrap(), seed: 7, ..ScanConfig::default() };
+    let cfg = ScanConfig { protocol: ExcitationProtocol::by_name(protocol).unwrap(), seed: 7, ..ScanConfig::default() };
     let summary = scan(&mut rig, &plan, None, &cfg, &out, &RunControl::new(), &mut Reasons).unwrap();
     let dataset = Dataset::open(dir.path()).unwrap();
     let (mut errors, mut statuses) = (Vec::new(), Vec::new());

@@ -1,9 +1,8 @@
 //! The reference check after a recovery: a committed point re-measured and compared with what was committed.
 
 use metaplate_dsp::deconv::DeconvConfig;
+use metaplate_dsp::excitation::{ExcitationProtocol, Scheme};
 use metaplate_dsp::kirkeby::KirkebyFilter;
-use metaplate_dsp::pipeline::{PreparedLayout, RepetitionLayout};
-use metaplate_dsp::sweep::SweepSpec;
 use metaplate_store::{Dataset, Status, StoreError};
 
 use crate::drive::{DrivePlayback, excitation};
@@ -20,12 +19,9 @@ pub struct ReferenceSpec<'a> {
     pub dir: &'a std::path::Path,
     /// The plan's points, in order: the first committed valid or re-measured is the reference.
     pub points: &'a [usize],
-    /// One period of the excitation (its `sample_rate_hz` is replaced by the DAQ's).
-    pub sweep: &'a SweepSpec,
-    /// Periods played back to back.
-    pub repetitions: usize,
-    /// Deconvolution (its `sample_rate_hz` is replaced by the DAQ's).
-    pub deconv: &'a DeconvConfig,
+    /// The scan's protocol: its sweep, repetitions and deconvolution (their rates replaced by the DAQ's), played
+    /// by one actuator alone.
+    pub protocol: &'a ExcitationProtocol,
     /// Each actuator's inverse filter, if the scan is compensated.
     pub filters: Option<&'a [KirkebyFilter]>,
     /// Deviation above which the check warns, dB.
@@ -140,16 +136,18 @@ impl<'a> ReferenceCheck<'a> {
     ) -> Result<Option<Vec<f64>>, RecipeError> {
         const ATTEMPTS: u32 = 3;
         let fs = instruments.daq_rate_hz();
-        let sweep = excitation(self.spec.sweep, fs)?;
-        let deconv = DeconvConfig { sample_rate_hz: fs, ..*self.spec.deconv };
+        let protocol = self.spec.protocol;
+        let sweep = excitation(&protocol.sweep, fs)?;
+        let deconv = DeconvConfig { sample_rate_hz: fs, ..protocol.deconv };
         // The scan's tail: the response and the longest filter.
         let fir_len = self.spec.filters.map_or(0, |f| f.iter().map(|k| k.taps.len()).max().unwrap_or(0));
         let filter = self.spec.filters.and_then(|f| f.get(self.actuator));
-        let playback = DrivePlayback::new(&sweep, self.spec.repetitions, deconv.ir_len + fir_len, filter)?;
+        let playback = DrivePlayback::new(&sweep, protocol.repetitions, deconv.ir_len + fir_len, filter)?;
         let buffers = playback.audio_buffers(&instruments.rig.wiring, self.actuator, fs)?;
         let record = record_samples(&playback, fs);
-        let layout = RepetitionLayout { excitation: sweep, repetitions: self.spec.repetitions };
-        let prepared = PreparedLayout::new(&layout, &deconv)?;
+        // One actuator alone whatever the scan's scheme: the protocol's sequential decoder, for one actuator.
+        let alone = ExcitationProtocol { scheme: Scheme::Sequential, adaptive: None, ..protocol.clone() };
+        let decoder = alone.decoder(1, &deconv)?;
         instruments.with_recovery(control, observer, |i| i.aim(x_m, y_m))?;
         for _ in 0..ATTEMPTS {
             let Some(acquired) =
@@ -162,7 +160,7 @@ impl<'a> ReferenceCheck<'a> {
             }
             let acq = acquired.acquisition;
             // A processing failure is a bad recording (as the scan treats it), not a reason to stop the scan.
-            let Ok(result) = prepared.process_channel(&acq.recording.velocity_v, &acq.recording.loopback_v) else {
+            let Ok(result) = decoder.decode_shot(&acq.recording.velocity_v, &acq.recording.loopback_v) else {
                 continue;
             };
             if result.snr_db.is_some_and(|snr| snr < self.spec.min_snr_db) {

@@ -6,9 +6,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use metaplate_core::scene::Scene;
+use metaplate_dsp::excitation::ExcitationProtocol;
 use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanProtocol, ScanSummary, scan};
+use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanSummary, scan};
 use metaplate_recipes::{Event, Observer, Output, RecipeError, RunControl};
 use metaplate_store::Dataset;
 
@@ -76,7 +77,7 @@ pub fn run_scan_with(
 
 /// The quick protocol with seed 7.
 pub fn quick_config() -> ScanConfig {
-    ScanConfig { protocol: ScanProtocol::quick(), seed: 7, ..ScanConfig::default() }
+    ScanConfig { protocol: ExcitationProtocol::quick(), seed: 7, ..ScanConfig::default() }
 }
 
 /// Relative error energy of a measured response against the truth over [`BAND_HZ`], dB.

@@ -3,6 +3,7 @@
 //! `acquire` with the scan's retry policy.
 
 use metaplate_dsp::deconv::DeconvConfig;
+use metaplate_dsp::excitation::{Decoder, ExcitationProtocol};
 
 use crate::drive::{AudioPlayback, DrivePlayback};
 use crate::engine::acquire::{RetryPolicy, acquire};
@@ -10,7 +11,6 @@ use crate::engine::aim::aim;
 use crate::engine::session::Instruments;
 use crate::error::RecipeError;
 use crate::events::{Observer, RunControl};
-use crate::excitation::ScanProtocol;
 use crate::plans::calibrate::Calibration;
 use crate::plans::scan::points::{PointBook, Problem};
 use crate::plans::scan::processing::{Channel, Gates, Job, Work};
@@ -25,6 +25,8 @@ pub(crate) struct PointAcquisition<'p> {
     pub playbacks: &'p [AudioPlayback],
     /// The simultaneous protocol, if the scan plays one.
     pub simultaneous: Option<&'p Simultaneous>,
+    /// The protocol's decoder at the DAQ rate (adaptive rounds are decoded here, to decide on the next).
+    pub decoder: &'p Decoder,
     pub gates: &'p Gates,
     pub actuators: usize,
     /// Samples per DAQ channel to record per acquisition.
@@ -112,7 +114,7 @@ impl PointAcquisition<'_> {
                 let decoded = Err(Problem::Processing("an acquisition of the round failed".into()));
                 return Ok(Some(Work::Done(sim.outcomes(pending, decoded, worst, self.gates))));
             }
-            match sim.decode(&acquisitions, self.gates) {
+            match sim.decode(self.decoder, &acquisitions, self.gates) {
                 Ok(results) => rounds.add(&results),
                 Err(problem) => return Ok(Some(Work::Done(sim.outcomes(pending, Err(problem), None, self.gates)))),
             }
@@ -143,7 +145,7 @@ pub(crate) type Playbacks = (DrivePlayback, Vec<AudioPlayback>);
 pub(crate) fn build_playbacks(
     instruments: &Instruments<'_>,
     sweep: &[f64],
-    protocol: &ScanProtocol,
+    protocol: &ExcitationProtocol,
     deconv: &DeconvConfig,
     calibration: Option<&Calibration>,
 ) -> Result<Playbacks, RecipeError> {

@@ -25,7 +25,7 @@ use std::sync::mpsc;
 use metaplate_core::grid::GridSpec;
 use metaplate_core::rig::Rig;
 use metaplate_dsp::deconv::DeconvConfig;
-use metaplate_dsp::pipeline::{PreparedLayout, RepetitionLayout};
+use metaplate_dsp::excitation::{ExcitationProtocol, Scheme};
 use metaplate_store::{DatasetMeta, Status};
 use serde_json::{Map, Value, json};
 
@@ -38,8 +38,6 @@ use crate::engine::run::Run;
 use crate::engine::session::{Instruments, RecoveryPolicy};
 use crate::error::RecipeError;
 use crate::events::{Event, Observer, RunControl};
-use crate::excitation::Excitation;
-pub use crate::excitation::ScanProtocol;
 use crate::output::Output;
 use crate::plans::calibrate::Calibration;
 use acquisition::{PointAcquisition, build_playbacks};
@@ -55,7 +53,7 @@ pub const RECIPE: &str = "scan";
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScanConfig {
     /// Excitation and processing.
-    pub protocol: ScanProtocol,
+    pub protocol: ExcitationProtocol,
     /// Lowest acceptable SNR of a response, dB.
     pub min_snr_db: f64,
     /// Largest acceptable clock drift between the audio interface and the DAQ, ppm.
@@ -78,7 +76,7 @@ impl Default for ScanConfig {
     /// The paper's protocol; SNR at least 20 dB, drift within 200 ppm, 3 attempts, 2 deferred visits, 0.1 m/s.
     fn default() -> Self {
         Self {
-            protocol: ScanProtocol::paper(),
+            protocol: ExcitationProtocol::paper(),
             min_snr_db: 20.0,
             max_drift_ppm: 200.0,
             max_attempts: 3,
@@ -131,10 +129,10 @@ impl ScanConfig {
         let d = &p.deconv;
         let value = json!({
             "protocol": { "name": p.name, "repetitions": p.repetitions,
-                "excitation": match p.excitation {
-                    Excitation::Sequential => json!({ "kind": "sequential" }),
-                    Excitation::Hadamard => json!({ "kind": "hadamard" }),
-                    Excitation::Interleaved { slot_s } => json!({ "kind": "interleaved", "slot_s": slot_s }),
+                "excitation": match p.scheme {
+                    Scheme::Sequential => json!({ "kind": "sequential" }),
+                    Scheme::Hadamard => json!({ "kind": "hadamard" }),
+                    Scheme::Interleaved { slot_s } => json!({ "kind": "interleaved", "slot_s": slot_s }),
                 },
                 "adaptive": p.adaptive.map(|a| json!({ "target_snr_db": a.target_snr_db, "max_rounds": a.max_rounds })),
                 "sweep": { "f1_hz": s.f1_hz, "f2_hz": s.f2_hz, "duration_s": s.duration_s, "amplitude": s.amplitude,
@@ -219,8 +217,8 @@ pub fn scan(
     let protocol = &cfg.protocol;
     let sweep = excitation(&protocol.sweep, fs)?;
     let deconv = DeconvConfig { sample_rate_hz: fs, ..protocol.deconv };
-    let layout = RepetitionLayout { excitation: sweep.clone(), repetitions: protocol.repetitions };
-    let prepared = PreparedLayout::new(&layout, &deconv)?;
+    // One decoder for the run: the sequential path decodes each actuator's acquisition with it as it comes.
+    let decoder = protocol.decoder(actuators, &deconv)?;
     let (playbacks, simultaneous, record) = if protocol.is_simultaneous() {
         let sim = Simultaneous::new(&instruments, protocol, &deconv, calibration)?;
         let record = record_samples_for(sim.playback.daq_len, fs);
@@ -237,6 +235,7 @@ pub fn scan(
         cfg,
         playbacks: &playbacks,
         simultaneous: simultaneous.as_ref(),
+        decoder: &decoder,
         gates: &gates,
         actuators,
         record,
@@ -248,12 +247,12 @@ pub fn scan(
     let result = std::thread::scope(|scope| -> Result<(), RecipeError> {
         let (job_tx, job_rx) = mpsc::channel::<Job>();
         let (done_tx, done_rx) = mpsc::channel::<Processed>();
-        let prepared = &prepared;
+        let decoder = &decoder;
         let gates = &gates;
         let simultaneous = simultaneous.as_ref();
         scope.spawn(move || {
             for job in job_rx {
-                if done_tx.send(process(job, prepared, simultaneous, gates)).is_err() {
+                if done_tx.send(process(job, decoder, simultaneous, gates)).is_err() {
                     break;
                 }
             }
@@ -261,9 +260,7 @@ pub fn scan(
         let mut reference = ReferenceCheck::new(ReferenceSpec {
             dir: &out.dir,
             points: &plan.points,
-            sweep: &cfg.protocol.sweep,
-            repetitions: cfg.protocol.repetitions,
-            deconv: &cfg.protocol.deconv,
+            protocol: &cfg.protocol,
             filters: calibration.map(|c| c.filters.as_slice()),
             limit_db: cfg.recovery.reference_limit_db,
             min_snr_db: cfg.min_snr_db,

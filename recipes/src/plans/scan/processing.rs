@@ -1,7 +1,7 @@
 //! The scan's processing of a point's recordings, on the worker thread: deconvolution (or a simultaneous
 //! protocol's decode) and the quality gates, into outcomes the plan settles.
 
-use metaplate_dsp::pipeline::PreparedLayout;
+use metaplate_dsp::excitation::Decoder;
 
 use crate::engine::aim::Aimed;
 use crate::engine::session::Acquisition;
@@ -49,16 +49,12 @@ pub(crate) struct Gates {
 }
 
 /// Deconvolves and gates every channel of a job (on the worker thread).
-pub(crate) fn process(
-    job: Job,
-    prepared: &PreparedLayout,
-    simultaneous: Option<&Simultaneous>,
-    gates: &Gates,
-) -> Processed {
+pub(crate) fn process(job: Job, decoder: &Decoder, simultaneous: Option<&Simultaneous>, gates: &Gates) -> Processed {
     let outcomes = match (job.work, simultaneous) {
-        (Work::Channels(channels), _) => process_channels(channels, prepared, gates),
+        (Work::Channels(channels), _) => process_channels(channels, decoder, gates),
         (Work::Shots { pending, acquisitions, problem }, Some(sim)) => {
-            let decoded = sim.decode(&acquisitions, gates).map(|results| results.into_iter().map(Some).collect());
+            let decoded =
+                sim.decode(decoder, &acquisitions, gates).map(|results| results.into_iter().map(Some).collect());
             sim.outcomes(&pending, decoded, problem, gates)
         }
         (Work::Shots { pending, .. }, None) => {
@@ -71,13 +67,13 @@ pub(crate) fn process(
 }
 
 /// Deconvolves and gates the channels of a sequential job.
-fn process_channels(channels: Vec<Channel>, prepared: &PreparedLayout, gates: &Gates) -> Vec<Outcome> {
+fn process_channels(channels: Vec<Channel>, decoder: &Decoder, gates: &Gates) -> Vec<Outcome> {
     channels
         .into_iter()
         .map(|ch| {
             let acq = &ch.acquisition;
             // The response is kept even when a gate fails: it is committed if no later visit does better.
-            let (result, gate) = match prepared.process_channel(&acq.recording.velocity_v, &acq.recording.loopback_v) {
+            let (result, gate) = match decoder.decode_shot(&acq.recording.velocity_v, &acq.recording.loopback_v) {
                 Err(e) => (None, Some(Problem::Processing(e.to_string()))),
                 Ok(r) => {
                     let to_units = acq.scale.m_s_per_v * gates.volts_per_fs;

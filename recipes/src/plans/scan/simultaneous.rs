@@ -2,23 +2,18 @@
 //! coherent average of an adaptive protocol's rounds.
 
 use metaplate_dsp::deconv::DeconvConfig;
+use metaplate_dsp::excitation::{Adaptive, Decoder, ExcitationProtocol};
 use metaplate_dsp::pipeline::ChannelResult;
-use metaplate_dsp::protocol::Protocol;
 
 use crate::drive::SimultaneousPlayback;
 use crate::engine::session::{Acquisition, Instruments};
 use crate::error::RecipeError;
-use crate::excitation::{Adaptive, ScanProtocol};
 use crate::plans::calibrate::Calibration;
 use crate::plans::scan::points::{Outcome, Problem};
 use crate::plans::scan::processing::Gates;
 
 /// A simultaneous protocol ready to play and decode.
 pub(crate) struct Simultaneous {
-    /// The DSP protocol (decoding at the DAQ rate).
-    protocol: Protocol,
-    /// Deconvolution at the DAQ rate.
-    deconv: DeconvConfig,
     pub playback: SimultaneousPlayback,
     pub adaptive: Option<Adaptive>,
 }
@@ -26,23 +21,28 @@ pub(crate) struct Simultaneous {
 impl Simultaneous {
     pub(crate) fn new(
         instruments: &Instruments<'_>,
-        protocol: &ScanProtocol,
+        protocol: &ExcitationProtocol,
         deconv: &DeconvConfig,
         calibration: Option<&Calibration>,
     ) -> Result<Self, RecipeError> {
         let wiring = &instruments.rig.wiring;
         let fs = instruments.daq_rate_hz();
-        let dsp = protocol.dsp();
-        dsp.validate(wiring.actuator_channels.len(), deconv.ir_len as f64 / fs)?;
+        protocol.validate(wiring.actuator_channels.len(), deconv.ir_len as f64 / fs)?;
         let fir_len = calibration.map_or(0, |c| c.filters.iter().map(|f| f.taps.len()).max().unwrap_or(0));
         // The tail holds the last response (ir_len) and the filter's own length, as in the sequential playback.
         let filters = calibration.map(|c| c.filters.as_slice());
-        let playback = SimultaneousPlayback::new(&dsp, wiring, fs, deconv.ir_len + fir_len, filters)?;
-        Ok(Self { protocol: dsp, deconv: *deconv, playback, adaptive: protocol.adaptive })
+        let playback = SimultaneousPlayback::new(protocol, wiring, fs, deconv.ir_len + fir_len, filters)?;
+        Ok(Self { playback, adaptive: protocol.adaptive })
     }
 
-    /// Every actuator's response (m/s per full scale of its compensated drive) and SNR from one round of shots.
-    pub(crate) fn decode(&self, acquisitions: &[Acquisition], gates: &Gates) -> Result<Vec<ChannelResult>, Problem> {
+    /// Every actuator's response (m/s per full scale of its compensated drive) and SNR from one round of shots,
+    /// decoded by the scan's `decoder` (the protocol's).
+    pub(crate) fn decode(
+        &self,
+        decoder: &Decoder,
+        acquisitions: &[Acquisition],
+        gates: &Gates,
+    ) -> Result<Vec<ChannelResult>, Problem> {
         // Velocity in m/s per loopback full scale, so that the responses come out in m/s per full scale.
         let velocities: Vec<Vec<f64>> = acquisitions
             .iter()
@@ -53,10 +53,7 @@ impl Simultaneous {
             .zip(acquisitions)
             .map(|(v, a)| (v.as_slice(), a.recording.loopback_v.as_slice()))
             .collect();
-        let mut results = self
-            .protocol
-            .decode(self.playback.response_gain.len(), &pairs, &self.deconv)
-            .map_err(|e| Problem::Processing(e.to_string()))?;
+        let mut results = decoder.decode(&pairs).map_err(|e| Problem::Processing(e.to_string()))?;
         for (r, gain) in results.iter_mut().zip(&self.playback.response_gain) {
             r.ir.iter_mut().for_each(|v| *v *= gain);
         }

@@ -7,7 +7,7 @@ use metaplate_core::rng::SplitMix64;
 use metaplate_dsp::band::BandLimit;
 use metaplate_dsp::conv::convolve;
 use metaplate_dsp::deconv::DeconvConfig;
-use metaplate_dsp::protocol::{Protocol, hadamard};
+use metaplate_dsp::excitation::{ExcitationProtocol, Scheme, hadamard};
 use metaplate_dsp::sweep::SweepSpec;
 
 const FS_HZ: f64 = 4000.0;
@@ -54,14 +54,14 @@ fn noise(rng: &mut SplitMix64, n: usize, sigma: f64) -> Vec<f64> {
 }
 
 /// Plays every shot of `protocol` through the linear plate and records velocity and loopback.
-fn record(protocol: &Protocol, noise_sigma: f64, seed: u64) -> Vec<(Vec<f64>, Vec<f64>)> {
+fn record(protocol: &ExcitationProtocol, noise_sigma: f64, seed: u64) -> Vec<(Vec<f64>, Vec<f64>)> {
     record_with(protocol, noise_sigma, seed, &[1.0; ACTUATORS], |x| x)
 }
 
 /// As [`record`], with actuator k's response scaled by `gains[k]` and each drive sample passed through `coil` (a
 /// static nonlinearity, as the voice coils' Hammerstein model) before the plate.
 fn record_with(
-    protocol: &Protocol,
+    protocol: &ExcitationProtocol,
     noise_sigma: f64,
     seed: u64,
     gains: &[f64],
@@ -93,11 +93,15 @@ fn record_with(
         .collect()
 }
 
-fn decode(protocol: &Protocol, recordings: &[(Vec<f64>, Vec<f64>)]) -> Vec<Vec<f64>> {
+fn decode(protocol: &ExcitationProtocol, recordings: &[(Vec<f64>, Vec<f64>)]) -> Vec<Vec<f64>> {
     decode_with(protocol, recordings, &cfg())
 }
 
-fn decode_with(protocol: &Protocol, recordings: &[(Vec<f64>, Vec<f64>)], cfg: &DeconvConfig) -> Vec<Vec<f64>> {
+fn decode_with(
+    protocol: &ExcitationProtocol,
+    recordings: &[(Vec<f64>, Vec<f64>)],
+    cfg: &DeconvConfig,
+) -> Vec<Vec<f64>> {
     let pairs: Vec<(&[f64], &[f64])> = recordings.iter().map(|(v, l)| (v.as_slice(), l.as_slice())).collect();
     protocol.decode(ACTUATORS, &pairs, cfg).unwrap().into_iter().map(|r| r.ir).collect()
 }
@@ -127,12 +131,12 @@ fn hadamard_matrix_is_orthogonal() {
 #[test]
 fn noiseless_protocols_agree_with_the_sequential_one() {
     let reference = decode(
-        &Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 },
-        &record(&Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 }, 0.0, 1),
+        &ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2),
+        &record(&ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2), 0.0, 1),
     );
     // Superposition is exact for a linear plate, so only rounding separates the Hadamard decode from the sequential
     // one: -200 dB would be machine precision; -100 dB leaves room for the FFTs' rounding over 8 shots.
-    let hadamard = Protocol::Hadamard { sweep: sweep(1.0), repetitions: 2 };
+    let hadamard = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(1.0), 2);
     let e = error_db(&decode(&hadamard, &record(&hadamard, 0.0, 1)), &reference);
     assert!(e < -100.0, "Hadamard vs sequential: {e:.1} dB");
     // The interleaved protocol deconvolves one long exponential sweep linearly (not periodically), against a
@@ -140,7 +144,12 @@ fn noiseless_protocols_agree_with_the_sequential_one() {
     // the window's truncation of the band-limit ringing (-51 to -56 dB per actuator here; -30 dB would mean a
     // misplaced slot, which costs -5 dB per sample at 4 kHz).
     let exp = sweep(1.0).as_exponential();
-    let interleaved = Protocol::Interleaved { sweep: exp, slot_s: 0.1 + exp.exp_rate_s().unwrap() * 3f64.ln() + 0.01 };
+    let interleaved = ExcitationProtocol::new(
+        "test",
+        Scheme::Interleaved { slot_s: 0.1 + exp.exp_rate_s().unwrap() * 3f64.ln() + 0.01 },
+        exp,
+        1,
+    );
     // An exponential sweep's power falls with frequency, so it needs a lower regularisation (see
     // `DeconvConfig::paper`).
     let exp_cfg = DeconvConfig { regularisation: 1e-5, ..cfg() };
@@ -154,20 +163,20 @@ fn hadamard_is_as_accurate_in_an_eighth_of_the_time() {
     // 9 dB (8x in noise energy) more accurate; and in an eighth of the time (periods of 1/8 the length would not
     // hold the response, so: 8 shots of 4 periods of 0.25 s vs 8 shots of 4 periods of 2 s) equally accurate.
     let truth = decode(
-        &Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 },
-        &record(&Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 }, 0.0, 1),
+        &ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2),
+        &record(&ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2), 0.0, 1),
     );
     let sigma = 0.05;
-    let seq = Protocol::Sequential { sweep: sweep(1.0), repetitions: 4 };
-    let had = Protocol::Hadamard { sweep: sweep(1.0), repetitions: 4 };
+    let seq = ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 4);
+    let had = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(1.0), 4);
     let e_seq = error_db(&decode(&seq, &record(&seq, sigma, 2)), &truth);
     let e_had = error_db(&decode(&had, &record(&had, sigma, 3)), &truth);
     // 10 log10(8) = 9.0 dB expected; the error estimate from one noise draw over 8 x 400 samples is good to about
     // +/-1 dB, so 7 to 11 dB.
     let gain = e_seq - e_had;
     assert!((7.0..11.0).contains(&gain), "Hadamard gain {gain:.1} dB (sequential {e_seq:.1}, Hadamard {e_had:.1})");
-    let fast = Protocol::Hadamard { sweep: sweep(0.25), repetitions: 4 };
-    let slow = Protocol::Sequential { sweep: sweep(2.0), repetitions: 4 };
+    let fast = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(0.25), 4);
+    let slow = ExcitationProtocol::new("test", Scheme::Sequential, sweep(2.0), 4);
     let (t_fast, t_slow) = (fast.time_per_point_s(ACTUATORS, 0.1), slow.time_per_point_s(ACTUATORS, 0.1));
     let e_fast = error_db(&decode(&fast, &record(&fast, sigma, 4)), &truth);
     let e_slow = error_db(&decode(&slow, &record(&slow, sigma, 5)), &truth);
@@ -178,9 +187,9 @@ fn hadamard_is_as_accurate_in_an_eighth_of_the_time() {
 
 #[test]
 fn hadamard_snr_reflects_the_averaging() {
-    let had = Protocol::Hadamard { sweep: sweep(1.0), repetitions: 4 };
-    let seq = Protocol::Sequential { sweep: sweep(1.0), repetitions: 4 };
-    let snr = |p: &Protocol, seed| {
+    let had = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(1.0), 4);
+    let seq = ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 4);
+    let snr = |p: &ExcitationProtocol, seed| {
         let recordings = record(p, 0.05, seed);
         let pairs: Vec<(&[f64], &[f64])> = recordings.iter().map(|(v, l)| (v.as_slice(), l.as_slice())).collect();
         let results = p.decode(ACTUATORS, &pairs, &cfg()).unwrap();
@@ -195,47 +204,49 @@ fn hadamard_snr_reflects_the_averaging() {
 #[test]
 fn protocols_refuse_what_they_cannot_measure() {
     let exp = sweep(1.0).as_exponential();
-    let short_slot = Protocol::Interleaved { sweep: exp, slot_s: 0.2 };
+    let short_slot = ExcitationProtocol::new("test", Scheme::Interleaved { slot_s: 0.2 }, exp, 1);
     let err = short_slot.validate(ACTUATORS, 0.1).unwrap_err().to_string();
     assert!(err.contains("slot_s") && err.contains("third harmonic"), "{err}");
-    let linear = Protocol::Interleaved { sweep: sweep(1.0), slot_s: 5.0 };
+    let linear = ExcitationProtocol::new("test", Scheme::Interleaved { slot_s: 5.0 }, sweep(1.0), 1);
     assert!(linear.validate(ACTUATORS, 0.1).unwrap_err().to_string().contains("exponential"));
-    let none = Protocol::Sequential { sweep: sweep(1.0), repetitions: 0 };
+    let none = ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 0);
     assert!(none.validate(ACTUATORS, 0.1).is_err());
-    assert!(Protocol::paper().validate(0, 0.5).is_err());
-    assert!(Protocol::paper().validate(65, 0.5).is_err());
+    assert!(ExcitationProtocol::paper().validate(0, 0.5).is_err());
+    assert!(ExcitationProtocol::paper().validate(65, 0.5).is_err());
     // Wrong number of recordings.
-    let recordings = record(&Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 }, 0.0, 1);
+    let recordings = record(&ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2), 0.0, 1);
     let pairs: Vec<(&[f64], &[f64])> = recordings.iter().take(7).map(|(v, l)| (v.as_slice(), l.as_slice())).collect();
-    let err = Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 }.decode(ACTUATORS, &pairs, &cfg()).unwrap_err();
+    let err = ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2)
+        .decode(ACTUATORS, &pairs, &cfg())
+        .unwrap_err();
     assert!(err.to_string().contains("recordings and shots"), "{err}");
 }
 
 #[test]
 fn extremes_one_actuator_and_one_repetition() {
     // One actuator: a Hadamard protocol of order 1 is the sequential one.
-    let one = Protocol::Hadamard { sweep: sweep(1.0), repetitions: 1 };
+    let one = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(1.0), 1);
     assert_eq!(one.shots(1).unwrap().len(), 1);
     // Paper timing: 8 actuators x 5 x 3 s + 0.5 s ring-out each = 124 s per point.
-    assert!((Protocol::paper().time_per_point_s(8, 0.5) - 124.0).abs() < 1e-9);
+    assert!((ExcitationProtocol::paper().time_per_point_s(8, 0.5) - 124.0).abs() < 1e-9);
     // Non-power-of-two actuator counts round the Hadamard order up.
-    assert_eq!(Protocol::Hadamard { sweep: sweep(1.0), repetitions: 1 }.shots(5).unwrap().len(), 8);
+    assert_eq!(ExcitationProtocol::new("test", Scheme::Hadamard, sweep(1.0), 1).shots(5).unwrap().len(), 8);
 }
 
 #[test]
 fn extremes_short_sweeps_and_a_response_longer_than_the_period() {
     // A period shorter than the response cannot be deconvolved periodically: refused, naming the period.
-    let short = Protocol::Hadamard { sweep: sweep(0.05), repetitions: 2 };
+    let short = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(0.05), 2);
     let err = short.validate(ACTUATORS, 0.1).unwrap_err().to_string();
     assert!(err.contains("ir_len_s") && err.contains("period"), "{err}");
     let pairs: Vec<(&[f64], &[f64])> = Vec::new();
     assert!(short.decode(ACTUATORS, &pairs, &cfg()).is_err());
     // The shortest sweep that holds the 0.1 s response plus the pipeline's guard (0.15 s) still recovers every
     // response without noise: -60 dB leaves room for the band limit's truncation in a period this short.
-    let shortest = Protocol::Hadamard { sweep: sweep(0.15), repetitions: 2 };
+    let shortest = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(0.15), 2);
     let truth = decode(
-        &Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 },
-        &record(&Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 }, 0.0, 1),
+        &ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2),
+        &record(&ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2), 0.0, 1),
     );
     let e = error_db(&decode(&shortest, &record(&shortest, 0.0, 1)), &truth);
     assert!(e < -40.0, "0.15 s Hadamard sweeps: {e:.1} dB");
@@ -244,10 +255,10 @@ fn extremes_short_sweeps_and_a_response_longer_than_the_period() {
 #[test]
 fn extremes_one_repetition_decodes_without_an_snr() {
     let truth = decode(
-        &Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 },
-        &record(&Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 }, 0.0, 1),
+        &ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2),
+        &record(&ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2), 0.0, 1),
     );
-    let one = Protocol::Hadamard { sweep: sweep(1.0), repetitions: 1 };
+    let one = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(1.0), 1);
     let recordings = record(&one, 0.0, 1);
     let pairs: Vec<(&[f64], &[f64])> = recordings.iter().map(|(v, l)| (v.as_slice(), l.as_slice())).collect();
     let results = one.decode(ACTUATORS, &pairs, &cfg()).unwrap();
@@ -265,8 +276,8 @@ fn extremes_40_db_spread_between_actuators_does_not_leak() {
     // being swamped by the loud ones' energy (which would read about +40 dB).
     let mut gains = [1.0; ACTUATORS];
     gains[3] = 0.01;
-    let seq = Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 };
-    let had = Protocol::Hadamard { sweep: sweep(1.0), repetitions: 2 };
+    let seq = ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2);
+    let had = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(1.0), 2);
     let a = decode(&seq, &record_with(&seq, 0.0, 1, &gains, |x| x));
     let b = decode(&had, &record_with(&had, 0.0, 1, &gains, |x| x));
     let e = error_db(&b[3..4], &a[3..4]);
@@ -275,8 +286,8 @@ fn extremes_40_db_spread_between_actuators_does_not_leak() {
 
 #[test]
 fn extremes_strong_nonlinearity_odd_stays_with_its_actuator_even_leaves_the_others() {
-    let seq = Protocol::Sequential { sweep: sweep(1.0), repetitions: 2 };
-    let had = Protocol::Hadamard { sweep: sweep(1.0), repetitions: 2 };
+    let seq = ExcitationProtocol::new("test", Scheme::Sequential, sweep(1.0), 2);
+    let had = ExcitationProtocol::new("test", Scheme::Hadamard, sweep(1.0), 2);
     // A 30 % cubic flips sign with the drive, so each actuator's distortion decodes with it, exactly as in the
     // sequential protocol: the two decodes agree to rounding (-100 dB).
     let cubic = |x: f64| x + 0.3 * x * x * x;

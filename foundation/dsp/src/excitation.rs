@@ -1,0 +1,674 @@
+//! Excitation protocols: how the actuators are played to measure every actuator's impulse response at one grid
+//! point, and how the recordings are turned back into one response per actuator.
+//!
+//! A protocol is a list of [`Shot`]s. In a shot every actuator plays the same excitation (one sweep period,
+//! repeated back to back), each with its own gain (+1, -1 or 0 for silent) and start delay; the loopback reference
+//! plays the excitation undelayed with gain +1. The recipe plays each shot (applying the actuators' Kirkeby
+//! compensation to their drives), records velocity and loopback, and hands the recordings to
+//! [`ExcitationProtocol::decode`].
+//!
+//! | protocol | shots | assumptions |
+//! |---|---|---|
+//! | [`Scheme::Sequential`] (the paper's, with a linear sweep) | one per actuator, the others silent | none beyond the per-channel pipeline's: responses shorter than one period |
+//! | [`Scheme::Hadamard`] | `N` (the power of two `>= actuators`), all actuators at once with the signs of row `s` of the Sylvester Hadamard matrix | linearity and superposition (the actuators' responses add at the plate); distortion of one actuator leaks into the others' responses as noise |
+//! | [`Scheme::Interleaved`] (multiple exponential sweeps) | one: all actuators play one exponential sweep, actuator `k` delayed by `k * slot_s` | linearity; the response plus the harmonics' advance `L ln 3` fit in one slot; player and recorder on one clock (no drift estimate: a drift `d` moves actuator `k`'s response by `k slot_s d`) |
+//!
+//! Energy: with the same sweep and repetitions, each actuator gets as much excitation energy in a Hadamard scan as
+//! in a sequential one, and every shot measures all of them: `N` shots of `N` actuators instead of `N` shots of
+//! one. Decoding averages `N` shots, so the noise in each response falls by `N` in power, and the same accuracy
+//! needs `N` times less playing time: the 8 x limit for 8 actuators.
+//!
+//! # The registry of names
+//!
+//! [`parse`] turns a name into a protocol; [`NAMES`] lists them with a line of help each (the CLI's help is
+//! generated from it).
+//!
+//!
+//! Syntax: `NAME` or `NAME:SETTINGS`, names in kebab-case. `D` is the sweep's duration in seconds (0.6 s at
+//! least: the 0.5 s responses must fit one period), `R` the periods per shot (at least 1).
+//!
+//! | name | what is played | assumptions |
+//! |---|---|---|
+//! | `paper` | each actuator alone, a 3 s linear sweep 62..625 Hz, 5 periods (120 s of sweeps per point) | responses shorter than one period (0.5 s); nothing else |
+//! | `quick` | each actuator alone, a 1 s linear sweep, 2 periods | as `paper` |
+//! | `sequential:DxR` | each actuator alone, linear sweeps | as `paper` |
+//! | `sequential-exp:DxR` | each actuator alone, exponential sweeps; the harmonics land before time 0 of the periodic response and are cut away (harmonic separation) | harmonic `k`'s advance `L ln k` (`L = D / ln(f2/f1)`) at least the response length beyond which the window stops, i.e. `D - 0.5 s >= L ln 2` for the second harmonic |
+//! | `hadamard:DxR` | all actuators at once, 8 shots signed by the 8 x 8 Hadamard matrix, decoded by its transpose (8 x the energy per actuator per unit time) | linearity and superposition at the plate; odd-order distortion flips with the sign and stays with its actuator (as sequentially); even-order does not flip, so it can only land in actuator 0's (all-ones) column |
+//! | `interleaved:D` | all actuators in one shot, one exponential sweep each, staggered by a slot (the multiple exponential sweep method) | linearity; slot >= response (0.5 s) + the third harmonic's advance `L ln 3`, else refused; one period: no SNR estimate, no averaging; **no clock-drift correction**: actuator `k`'s response is cut at `k` slots on the recorder's clock, off by `k x slot x drift` (12 samples for actuator 7 at 50 ppm with 1.43 s slots), which costs it most of its accuracy at the top of the band (measured median error -10 dB on the mock lab, against -37 dB for the others) |
+//! | `adaptive:DxR@SNR[/ROUNDS]` (R >= 2) | Hadamard rounds (`hadamard:DxR`) averaged until every actuator's SNR reaches `SNR` dB, at most `ROUNDS` (default 8) | as `hadamard`; the SNR estimate is the spread of the periods; when the target is not met in `ROUNDS` rounds the rows are committed with status `failed` and the reason |
+//!
+//! Every protocol keeps the paper's deconvolution ([`DeconvConfig::paper`]: 0.5 s responses, band 62..625 Hz);
+//! exponential sweeps use regularisation 1e-5 (their power falls 10 dB across the band, see
+//! [`DeconvConfig::paper`]).
+
+use crate::deconv::{DeconvConfig, deconvolve_with_reference};
+use crate::error::{DspError, check_result};
+use crate::pipeline::{ChannelResult, PreparedLayout, RepetitionLayout};
+use crate::sweep::{SweepKind, SweepSpec};
+
+/// Largest actuator count a protocol accepts (a 64 x 64 Hadamard matrix at most).
+pub const MAX_ACTUATORS: usize = 64;
+
+/// Harmonic orders the interleaved protocol keeps out of the other actuators' windows (2 and 3: the voice coils'
+/// quadratic and cubic distortion).
+const INTERLEAVED_MAX_ORDER: f64 = 3.0;
+
+/// How the actuators are played at a grid point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scheme {
+    /// Each actuator alone, `repetitions` periods of the sweep (the paper's).
+    Sequential,
+    /// All actuators at once, `N` shots signed by a Sylvester Hadamard matrix, decoded by its transpose.
+    Hadamard,
+    /// All actuators in one shot, playing one exponential sweep staggered by `slot_s` (the multiple exponential
+    /// sweep method); one period, so no SNR estimate.
+    Interleaved {
+        /// Delay between consecutive actuators' starts, s. Delays are rounded to whole samples at each rate; a
+        /// slot that is a whole number of samples at both the player's and the recorder's rate (a multiple of
+        /// 1 ms for 48 and 24 kHz) keeps the two roundings equal.
+        slot_s: f64,
+    },
+}
+
+/// Averaging rounds until a target SNR.
+///
+/// Valid range: finite `target_snr_db`; `max_rounds >= 1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Adaptive {
+    /// Every actuator's SNR must reach this, dB.
+    pub target_snr_db: f64,
+    /// Rounds (each one full set of shots) at most; then the point is committed, its short rows flagged.
+    pub max_rounds: usize,
+}
+
+/// An excitation protocol: how the actuators are played at one grid point and how the recordings are decoded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExcitationProtocol {
+    /// Name recorded in the manifest (`paper`, `quick`, `hadamard:1x2`, ...).
+    pub name: String,
+    /// How the actuators are played (one at a time, or all at once).
+    pub scheme: Scheme,
+    /// One period of the excitation (its `sample_rate_hz` is replaced by the player's and the recorder's).
+    pub sweep: SweepSpec,
+    /// Periods played back to back per shot, at least 1 (the interleaved scheme plays 1 whatever this says).
+    pub repetitions: usize,
+    /// Deconvolution (its `sample_rate_hz` is replaced by the recorder's).
+    pub deconv: DeconvConfig,
+    /// Averaging until a target SNR (simultaneous schemes only); `None`: one round.
+    pub adaptive: Option<Adaptive>,
+}
+
+/// One playback of a protocol: what every actuator and the loopback play.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Shot {
+    /// Per actuator: the excitation's gain (+1, -1, or 0 for silent).
+    pub gains: Vec<f64>,
+    /// Per actuator: start delay, s (a whole number of samples at the rates used).
+    pub delays_s: Vec<f64>,
+}
+
+impl ExcitationProtocol {
+    /// A protocol named `name` playing `sweep` by `scheme`, `repetitions` periods per shot, with the paper's
+    /// deconvolution (regularisation 1e-5 for an exponential sweep, see [`DeconvConfig::paper`]) and no adaptive
+    /// averaging. Not validated: see [`ExcitationProtocol::validate`].
+    pub fn new(name: &str, scheme: Scheme, sweep: SweepSpec, repetitions: usize) -> Self {
+        let deconv = match sweep.exp_rate_s() {
+            Some(_) => DeconvConfig { regularisation: EXP_REGULARISATION, ..DeconvConfig::paper() },
+            None => DeconvConfig::paper(),
+        };
+        let repetitions = if matches!(scheme, Scheme::Interleaved { .. }) { 1 } else { repetitions };
+        Self { name: name.to_string(), scheme, sweep, repetitions, deconv, adaptive: None }
+    }
+
+    /// The paper's: [`SweepSpec::default`] (a 3 s linear sweep 62..625 Hz), 5 repetitions, sequential,
+    /// [`DeconvConfig::paper`] (0.5 s responses).
+    pub fn paper() -> Self {
+        Self::new("paper", Scheme::Sequential, SweepSpec::default(), 5)
+    }
+
+    /// For tests and quick looks: a 1 s sweep 62..625 Hz, 2 repetitions, the paper's deconvolution (0.5 s
+    /// responses fit the 1 s period). 7.5 times less playing than the paper's; the SNR drops by about 10 dB (the
+    /// sweep energy per period falls 3 times and 2 periods are averaged instead of 5).
+    pub fn quick() -> Self {
+        Self::new("quick", Scheme::Sequential, SweepSpec { duration_s: 1.0, ..SweepSpec::default() }, 2)
+    }
+
+    /// A protocol by name (see the module's table); the same as [`parse`].
+    ///
+    /// # Errors
+    /// As [`parse`].
+    pub fn by_name(name: &str) -> Result<Self, ProtocolNameError> {
+        parse(name)
+    }
+
+    /// The sweep every shot plays.
+    pub fn sweep(&self) -> &SweepSpec {
+        &self.sweep
+    }
+
+    /// Periods per shot (1 for the interleaved scheme).
+    pub fn repetitions(&self) -> usize {
+        match self.scheme {
+            Scheme::Sequential | Scheme::Hadamard => self.repetitions,
+            Scheme::Interleaved { .. } => 1,
+        }
+    }
+
+    /// Whether every actuator plays in every shot (shots are then measured and retried as a whole point).
+    pub fn is_simultaneous(&self) -> bool {
+        !matches!(self.scheme, Scheme::Sequential)
+    }
+
+    /// Nominal playing time per point and round for `actuators` actuators, s: every shot's playback and the
+    /// response's ring-out of [`ExcitationProtocol::deconv`] (beam moves, settling and the recording margin are not
+    /// included). Adaptive protocols take between one and `max_rounds` times this.
+    pub fn nominal_time_per_point_s(&self, actuators: usize) -> f64 {
+        self.time_per_point_s(actuators, self.deconv.ir_len as f64 / self.deconv.sample_rate_hz)
+    }
+
+    /// Checks the protocol for `actuators` actuators and responses of `ir_len_s` seconds.
+    ///
+    /// Valid range: `1 <= actuators <= MAX_ACTUATORS`; a valid sweep; `repetitions >= 1`; for sequential and
+    /// Hadamard schemes a response shorter than the sweep's period (`ir_len_s < duration_s`); for
+    /// [`Scheme::Interleaved`] an exponential sweep and `slot_s >= ir_len_s + L ln 3` (`L` the sweep's rate), so
+    /// that every actuator's response, and the second and third harmonics of the next one, stay out of each other's
+    /// windows.
+    ///
+    /// # Errors
+    /// [`DspError::InvalidParameter`] naming what is out of range.
+    pub fn validate(&self, actuators: usize, ir_len_s: f64) -> Result<(), DspError> {
+        let invalid = |name: &'static str, reason: String| Err(DspError::InvalidParameter { name, reason });
+        if actuators == 0 || actuators > MAX_ACTUATORS {
+            return invalid("actuators", format!("{actuators}: must be 1 to {MAX_ACTUATORS}"));
+        }
+        self.sweep.validate()?;
+        if self.repetitions() == 0 {
+            return invalid("repetitions", "must be at least 1".into());
+        }
+        let sweep = &self.sweep;
+        match self.scheme {
+            Scheme::Sequential | Scheme::Hadamard if ir_len_s.is_nan() || ir_len_s >= sweep.duration_s => {
+                // The periodic deconvolution wraps a response longer than the period onto its own start.
+                return invalid(
+                    "ir_len_s",
+                    format!("a {ir_len_s} s response does not fit the sweep's {} s period", sweep.duration_s),
+                );
+            }
+            Scheme::Sequential | Scheme::Hadamard => {}
+            Scheme::Interleaved { slot_s } => {
+                let Some(rate_s) = sweep.exp_rate_s() else {
+                    return invalid("sweep.kind", "the interleaved protocol needs an exponential sweep".into());
+                };
+                let needed_s = ir_len_s + rate_s * INTERLEAVED_MAX_ORDER.ln();
+                if !(slot_s.is_finite() && slot_s >= needed_s) {
+                    return invalid(
+                        "slot_s",
+                        format!(
+                            "{slot_s} s is shorter than the response ({ir_len_s} s) plus the third harmonic's \
+                             advance ({:.3} s): at least {needed_s:.3} s",
+                            rate_s * INTERLEAVED_MAX_ORDER.ln()
+                        ),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The shots, in playing order, for `actuators` actuators.
+    ///
+    /// # Errors
+    /// As [`ExcitationProtocol::validate`] (with a zero response length: the decoder checks the real one).
+    pub fn shots(&self, actuators: usize) -> Result<Vec<Shot>, DspError> {
+        self.validate(actuators, 0.0)?;
+        let silent = vec![0.0; actuators];
+        let undelayed = vec![0.0; actuators];
+        Ok(match self.scheme {
+            Scheme::Sequential => (0..actuators)
+                .map(|k| {
+                    let mut gains = silent.clone();
+                    gains[k] = 1.0;
+                    Shot { gains, delays_s: undelayed.clone() }
+                })
+                .collect(),
+            Scheme::Hadamard => {
+                let order = actuators.next_power_of_two();
+                (0..order)
+                    .map(|s| Shot {
+                        gains: (0..actuators).map(|k| hadamard(s, k)).collect(),
+                        delays_s: undelayed.clone(),
+                    })
+                    .collect()
+            }
+            Scheme::Interleaved { slot_s } => {
+                vec![Shot {
+                    gains: vec![1.0; actuators],
+                    delays_s: (0..actuators).map(|k| k as f64 * slot_s).collect(),
+                }]
+            }
+        })
+    }
+
+    /// One period of the excitation at `sample_rate_hz` (the player's rate for playing, the recorder's for
+    /// decoding).
+    ///
+    /// # Errors
+    /// As [`SweepSpec::generate`] at that rate.
+    pub fn excitation(&self, sample_rate_hz: f64) -> Result<Vec<f64>, DspError> {
+        SweepSpec { sample_rate_hz, ..self.sweep }.generate()
+    }
+
+    /// Samples, at `sample_rate_hz`, from the start of a shot's playback to the end of the last actuator's last
+    /// period (add the response length and the latency for a recording).
+    pub fn shot_len_samples(&self, actuators: usize, sample_rate_hz: f64) -> usize {
+        let period = (self.sweep.duration_s * sample_rate_hz).round() as usize;
+        let delay = match self.scheme {
+            Scheme::Interleaved { slot_s } => (actuators.saturating_sub(1) as f64 * slot_s * sample_rate_hz).round(),
+            _ => 0.0,
+        } as usize;
+        self.repetitions() * period + delay
+    }
+
+    /// Playing time per grid point, s: every shot's playback plus `ir_len_s` of ring-out after each (beam moves
+    /// and settling are the recipe's).
+    pub fn time_per_point_s(&self, actuators: usize, ir_len_s: f64) -> f64 {
+        let (shots, delay_s) = match self.scheme {
+            Scheme::Sequential => (actuators, 0.0),
+            Scheme::Hadamard => (actuators.next_power_of_two(), 0.0),
+            Scheme::Interleaved { slot_s } => (1, actuators.saturating_sub(1) as f64 * slot_s),
+        };
+        shots as f64 * (self.repetitions() as f64 * self.sweep.duration_s + delay_s + ir_len_s)
+    }
+
+    /// What actuator `actuator` plays in `shot`, at `sample_rate_hz`: its delay in silence, then `gain` times the
+    /// excitation's periods; `None` when it is silent. The loopback plays [`ExcitationProtocol::reference`].
+    ///
+    /// # Errors
+    /// As [`ExcitationProtocol::excitation`]; [`DspError::InvalidParameter`] for an actuator the shot does not have.
+    pub fn drive(&self, shot: &Shot, actuator: usize, sample_rate_hz: f64) -> Result<Option<Vec<f64>>, DspError> {
+        let (Some(&gain), Some(&delay_s)) = (shot.gains.get(actuator), shot.delays_s.get(actuator)) else {
+            return Err(DspError::InvalidParameter {
+                name: "actuator",
+                reason: format!("{actuator} is beyond the shot's {} actuators", shot.gains.len()),
+            });
+        };
+        if gain == 0.0 {
+            return Ok(None);
+        }
+        let delay = (delay_s * sample_rate_hz).round() as usize;
+        let mut out = vec![0.0; delay];
+        let period = self.excitation(sample_rate_hz)?;
+        for _ in 0..self.repetitions() {
+            out.extend(period.iter().map(|x| gain * x));
+        }
+        Ok(Some(out))
+    }
+
+    /// What the loopback channel plays in every shot: the excitation's periods, undelayed.
+    ///
+    /// # Errors
+    /// As [`ExcitationProtocol::excitation`].
+    pub fn reference(&self, sample_rate_hz: f64) -> Result<Vec<f64>, DspError> {
+        Ok(self.excitation(sample_rate_hz)?.repeat(self.repetitions()))
+    }
+
+    /// The decoder of this protocol for `actuators` actuators and the deconvolution `cfg` (on the recorder's clock
+    /// at `cfg.sample_rate_hz`, responses of `cfg.ir_len` samples): the periodic deconvolution's set-up is built
+    /// once here, for every shot and grid point.
+    ///
+    /// # Errors
+    /// As [`ExcitationProtocol::validate`] with `cfg.ir_len` samples of response; as [`PreparedLayout::new`].
+    pub fn decoder(&self, actuators: usize, cfg: &DeconvConfig) -> Result<Decoder, DspError> {
+        self.validate(actuators, cfg.ir_len as f64 / cfg.sample_rate_hz)?;
+        let prepared = match self.scheme {
+            Scheme::Sequential | Scheme::Hadamard => {
+                let layout = RepetitionLayout {
+                    excitation: self.excitation(cfg.sample_rate_hz)?,
+                    repetitions: self.repetitions(),
+                };
+                Some(PreparedLayout::new(&layout, cfg)?)
+            }
+            Scheme::Interleaved { .. } => None,
+        };
+        Ok(Decoder { protocol: self.clone(), actuators, cfg: *cfg, prepared })
+    }
+
+    /// Turns the recordings of every shot (velocity and loopback, on the recorder's clock at `cfg.sample_rate_hz`,
+    /// in shot order) into one result per actuator; the same as [`ExcitationProtocol::decoder`] then
+    /// [`Decoder::decode`].
+    ///
+    /// # Errors
+    /// As [`ExcitationProtocol::decoder`] and [`Decoder::decode`].
+    pub fn decode(
+        &self,
+        actuators: usize,
+        recordings: &[(&[f64], &[f64])],
+        cfg: &DeconvConfig,
+    ) -> Result<Vec<ChannelResult>, DspError> {
+        self.decoder(actuators, cfg)?.decode(recordings)
+    }
+}
+
+/// A protocol ready to decode (see [`ExcitationProtocol::decoder`]).
+#[derive(Debug, Clone)]
+pub struct Decoder {
+    protocol: ExcitationProtocol,
+    actuators: usize,
+    cfg: DeconvConfig,
+    /// The periodic deconvolution (sequential and Hadamard schemes).
+    prepared: Option<PreparedLayout>,
+}
+
+impl Decoder {
+    /// The response of one shot's recording by the periodic deconvolution: for a sequential protocol, the response
+    /// of the shot's actuator (the scan decodes each actuator's acquisition as it comes).
+    ///
+    /// # Errors
+    /// [`DspError::InvalidParameter`] for an interleaved protocol (its one shot decodes as a whole: see
+    /// [`Decoder::decode`]); otherwise as [`PreparedLayout::process_channel`].
+    pub fn decode_shot(&self, velocity: &[f64], loopback: &[f64]) -> Result<ChannelResult, DspError> {
+        let Some(prepared) = &self.prepared else {
+            return Err(DspError::InvalidParameter {
+                name: "scheme",
+                reason: "an interleaved shot holds every actuator: decode it with `decode`".into(),
+            });
+        };
+        prepared.process_channel(velocity, loopback)
+    }
+
+    /// Turns the recordings of every shot (velocity and loopback, in shot order) into one result per actuator: the
+    /// impulse response from the loopback to the velocity (`cfg.ir_len` samples), its SNR, and the clock drift and
+    /// latency seen.
+    ///
+    /// SNR: sequential shots give each actuator's own (from the spread of its repetitions; `None` with one).
+    /// Hadamard responses are sums of `N` shots' responses with signs: their noise is the mean of the shots' noise
+    /// energies divided by `N`, and the SNR is the response's energy over it. The interleaved protocol has no
+    /// repetitions and gives `None`.
+    ///
+    /// Valid range: one recording pair per shot, each as [`PreparedLayout::process_channel`] requires.
+    ///
+    /// # Errors
+    /// [`DspError::LengthMismatch`] for the wrong number of recordings; otherwise as
+    /// [`PreparedLayout::process_channel`] and [`deconvolve_with_reference`].
+    pub fn decode(&self, recordings: &[(&[f64], &[f64])]) -> Result<Vec<ChannelResult>, DspError> {
+        let (actuators, cfg) = (self.actuators, &self.cfg);
+        let shots = match self.protocol.scheme {
+            Scheme::Sequential => actuators,
+            Scheme::Hadamard => actuators.next_power_of_two(),
+            Scheme::Interleaved { .. } => 1,
+        };
+        if recordings.len() != shots {
+            return Err(DspError::LengthMismatch { what: "recordings and shots", a: recordings.len(), b: shots });
+        }
+        match self.protocol.scheme {
+            Scheme::Sequential => {
+                recordings.iter().map(|(velocity, loopback)| self.decode_shot(velocity, loopback)).collect()
+            }
+            Scheme::Hadamard => {
+                let per_shot = recordings
+                    .iter()
+                    .map(|(velocity, loopback)| self.decode_shot(velocity, loopback))
+                    .collect::<Result<Vec<_>, _>>()?;
+                hadamard_decode(&per_shot, actuators)
+            }
+            Scheme::Interleaved { slot_s } => {
+                let fs = cfg.sample_rate_hz;
+                let (velocity, loopback) = recordings[0];
+                // The same rounding as `drive`, actuator by actuator.
+                let starts: Vec<usize> = (0..actuators).map(|k| (k as f64 * slot_s * fs).round() as usize).collect();
+                let last = starts.last().copied().unwrap_or(0);
+                let span = DeconvConfig { ir_len: last + cfg.ir_len, ..*cfg };
+                let total = deconvolve_with_reference(velocity, loopback, &span)?;
+                starts
+                    .iter()
+                    .map(|&start| {
+                        let ir = total[start..start + cfg.ir_len].to_vec();
+                        Ok(ChannelResult { ir, snr_db: None, drift_ppm: 0.0, latency_samples: 0.0 })
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
+/// Why a protocol name was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ProtocolNameError {
+    /// No protocol of that name.
+    #[error("unknown protocol `{name}` (known: {known})")]
+    Unknown {
+        /// The name given.
+        name: String,
+        /// The known names, comma-separated.
+        known: String,
+    },
+    /// A known name with malformed or out-of-range settings.
+    #[error("protocol `{name}`: {reason}")]
+    Settings {
+        /// The whole name given.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// Regularisation for exponential sweeps (see [`DeconvConfig::paper`]).
+const EXP_REGULARISATION: f64 = 1e-5;
+/// Shortest sweep, s: one period must hold the 0.5 s responses plus the periodic pipeline's guard for the clock
+/// drift (tens of samples).
+const MIN_SWEEP_S: f64 = 0.6;
+/// Longest sweep, s (a sanity bound: the paper's is 3 s).
+const MAX_SWEEP_S: f64 = 60.0;
+/// Most periods per shot (a sanity bound).
+const MAX_REPETITIONS: usize = 100;
+/// Default and largest number of adaptive rounds.
+const DEFAULT_ROUNDS: usize = 8;
+const MAX_ROUNDS: usize = 64;
+/// Slot margin beyond the response and the third harmonic's advance, s: a few periods of the band's lowest
+/// frequency, for the band-limit's ringing.
+const SLOT_MARGIN_S: f64 = 0.05;
+
+/// The names [`parse`] knows, with a one-line description each (for help texts).
+pub const NAMES: &[(&str, &str)] = &[
+    ("paper", "sequential linear sweeps, 3 s x 5 (the paper's)"),
+    ("quick", "sequential linear sweeps, 1 s x 2"),
+    ("sequential:DxR", "sequential linear sweeps, D s x R"),
+    ("sequential-exp:DxR", "sequential exponential sweeps with harmonic separation"),
+    ("hadamard:DxR", "all 8 actuators at once, Hadamard-coded linear sweeps (8 shots)"),
+    ("interleaved:D", "interleaved exponential sweeps (multiple exponential sweep method), one shot"),
+    ("adaptive:DxR@SNR[/ROUNDS]", "Hadamard rounds averaged until SNR dB per actuator, at most ROUNDS"),
+];
+
+/// The protocol called `name` (see the module's table).
+///
+/// # Errors
+/// [`ProtocolNameError::Unknown`] for an unknown name; [`ProtocolNameError::Settings`] naming what is wrong with
+/// malformed or out-of-range settings.
+pub fn parse(name: &str) -> Result<ExcitationProtocol, ProtocolNameError> {
+    let (kind, settings) = match name.split_once(':') {
+        Some((k, s)) => (k, Some(s)),
+        None => (name, None),
+    };
+    let bad = |why: &str| ProtocolNameError::Settings { name: name.to_string(), reason: why.to_string() };
+    fn need<'a>(s: Option<&'a str>, name: &str) -> Result<&'a str, ProtocolNameError> {
+        s.ok_or_else(|| ProtocolNameError::Settings {
+            name: name.to_string(),
+            reason: "needs settings after `:`".into(),
+        })
+    }
+    let linear = |duration_s: f64| SweepSpec { duration_s, ..SweepSpec::default() };
+    let base = |sweep: SweepSpec, repetitions: usize, scheme: Scheme| {
+        ExcitationProtocol::new(name, scheme, sweep, repetitions)
+    };
+    let protocol = match (kind, settings) {
+        ("paper", None) => ExcitationProtocol::paper(),
+        ("quick", None) => ExcitationProtocol::quick(),
+        ("paper" | "quick", Some(_)) => return Err(bad("takes no settings")),
+        ("sequential", s) => {
+            let (d, r) = duration_by_reps(need(s, name)?).map_err(|e| bad(&e))?;
+            base(linear(d), r, Scheme::Sequential)
+        }
+        ("sequential-exp", s) => {
+            let (d, r) = duration_by_reps(need(s, name)?).map_err(|e| bad(&e))?;
+            base(linear(d).as_exponential(), r, Scheme::Sequential)
+        }
+        ("hadamard", s) => {
+            let (d, r) = duration_by_reps(need(s, name)?).map_err(|e| bad(&e))?;
+            base(linear(d), r, Scheme::Hadamard)
+        }
+        ("interleaved", s) => {
+            let d = number(need(s, name)?, "duration").map_err(|e| bad(&e))?;
+            check_duration(d).map_err(|e| bad(&e))?;
+            let sweep = linear(d).as_exponential();
+            let ir_s = DeconvConfig::paper().ir_len as f64 / DeconvConfig::paper().sample_rate_hz;
+            let advance_s = sweep.exp_rate_s().map_or(0.0, |l| l * 3f64.ln());
+            // Whole milliseconds: a whole number of samples at both 24 and 48 kHz (see `Scheme::Interleaved`).
+            let slot_s = ((ir_s + advance_s + SLOT_MARGIN_S) * 1000.0).ceil() / 1000.0;
+            base(sweep, 1, Scheme::Interleaved { slot_s })
+        }
+        ("adaptive", s) => {
+            let s = need(s, name)?;
+            let (dr, rest) = s.split_once('@').ok_or_else(|| bad("expected DxR@SNR[/ROUNDS]"))?;
+            let (d, r) = duration_by_reps(dr).map_err(|e| bad(&e))?;
+            if r < 2 {
+                // The SNR estimate is the spread of the periods: one period has none.
+                return Err(bad("adaptive averaging needs at least 2 periods per shot (its SNR estimate)"));
+            }
+            let (snr, rounds) = match rest.split_once('/') {
+                Some((snr, rounds)) => (snr, Some(rounds)),
+                None => (rest, None),
+            };
+            let target_snr_db = number(snr, "SNR").map_err(|e| bad(&e))?;
+            let max_rounds = match rounds {
+                Some(r) => r.parse::<usize>().map_err(|_| bad(&format!("rounds `{r}` is not a whole number")))?,
+                None => DEFAULT_ROUNDS,
+            };
+            if !(1..=MAX_ROUNDS).contains(&max_rounds) {
+                return Err(bad(&format!("rounds {max_rounds} must be 1 to {MAX_ROUNDS}")));
+            }
+            let adaptive = Some(Adaptive { target_snr_db, max_rounds });
+            ExcitationProtocol { adaptive, ..base(linear(d), r, Scheme::Hadamard) }
+        }
+        (other, _) => {
+            let known: Vec<&str> = NAMES.iter().map(|(n, _)| *n).collect();
+            return Err(ProtocolNameError::Unknown { name: other.to_string(), known: known.join(", ") });
+        }
+    };
+    Ok(protocol)
+}
+
+/// `DxR`: a duration in seconds and a repetition count.
+fn duration_by_reps(s: &str) -> Result<(f64, usize), String> {
+    let (d, r) = s.split_once('x').ok_or_else(|| format!("`{s}`: expected DxR (seconds x repetitions)"))?;
+    let d = number(d, "duration")?;
+    check_duration(d)?;
+    let r: usize = r.parse().map_err(|_| format!("repetitions `{r}` is not a whole number"))?;
+    if !(1..=MAX_REPETITIONS).contains(&r) {
+        return Err(format!("repetitions {r} must be 1 to {MAX_REPETITIONS}"));
+    }
+    Ok((d, r))
+}
+
+fn number(s: &str, what: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("{what} `{s}` is not a finite number")),
+    }
+}
+
+fn check_duration(d: f64) -> Result<(), String> {
+    if (MIN_SWEEP_S..=MAX_SWEEP_S).contains(&d) {
+        Ok(())
+    } else {
+        Err(format!(
+            "sweep duration {d} s must be {MIN_SWEEP_S} to {MAX_SWEEP_S} s (a period holds the 0.5 s response)"
+        ))
+    }
+}
+
+/// Entry `(row, col)` of the Sylvester Hadamard matrix of any power-of-two order: `(-1)^popcount(row & col)`.
+pub fn hadamard(row: usize, col: usize) -> f64 {
+    if (row & col).count_ones().is_multiple_of(2) { 1.0 } else { -1.0 }
+}
+
+/// Responses of the actuators from the responses of the Hadamard shots: `g_k = (1/N) sum_s H[s][k] y_s`.
+fn hadamard_decode(per_shot: &[ChannelResult], actuators: usize) -> Result<Vec<ChannelResult>, DspError> {
+    let order = per_shot.len() as f64;
+    let ir_len = per_shot.first().map_or(0, |r| r.ir.len());
+    // A shot's noise energy from its SNR and energy; unknown when any shot has no SNR.
+    let noise: Option<f64> = per_shot
+        .iter()
+        .map(|r| r.snr_db.map(|snr| energy(&r.ir) / 10f64.powf(snr / 10.0)))
+        .sum::<Option<f64>>()
+        .map(|total| total / order / order);
+    let drift_ppm = per_shot.iter().map(|r| r.drift_ppm).sum::<f64>() / order;
+    let latency_samples = per_shot.iter().map(|r| r.latency_samples).sum::<f64>() / order;
+    (0..actuators)
+        .map(|k| {
+            let mut ir = vec![0.0; ir_len];
+            for (s, shot) in per_shot.iter().enumerate() {
+                let sign = hadamard(s, k) / order;
+                ir.iter_mut().zip(&shot.ir).for_each(|(g, y)| *g += sign * y);
+            }
+            check_result("Hadamard-decoded response", &ir)?;
+            let snr_db = noise.filter(|n| *n > 0.0).map(|n| 10.0 * (energy(&ir) / n).log10()).filter(|s| s.is_finite());
+            Ok(ChannelResult { ir, snr_db, drift_ppm, latency_samples })
+        })
+        .collect()
+}
+
+fn energy(signal: &[f64]) -> f64 {
+    signal.iter().map(|x| x * x).sum()
+}
+
+impl SweepSpec {
+    /// The exponential sweep over the same band, duration and rate.
+    pub fn as_exponential(&self) -> SweepSpec {
+        SweepSpec { kind: SweepKind::Exponential, ..*self }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_parse_to_their_protocols() {
+        let p = parse("paper").unwrap();
+        assert_eq!(p, ExcitationProtocol::paper());
+        assert_eq!(parse("quick").unwrap(), ExcitationProtocol::quick());
+        let h = parse("hadamard:1x2").unwrap();
+        assert_eq!((h.scheme, h.repetitions, h.sweep.duration_s), (Scheme::Hadamard, 2, 1.0));
+        // 8 shots of 2 s plus 0.5 s ring-out each: 20 s, against the paper's 124 s.
+        assert!((h.nominal_time_per_point_s(8) - 20.0).abs() < 1e-9);
+        assert!((p.nominal_time_per_point_s(8) - 124.0).abs() < 1e-9);
+        let e = parse("sequential-exp:2x1").unwrap();
+        assert!(e.sweep.exp_rate_s().is_some() && e.deconv.regularisation == EXP_REGULARISATION);
+        let i = parse("interleaved:2").unwrap();
+        let Scheme::Interleaved { slot_s } = i.scheme else { panic!("{i:?}") };
+        // The slot the DSP protocol requires for 0.5 s responses must be met.
+        assert!(i.validate(8, 0.5).is_ok(), "slot {slot_s}");
+        let a = parse("adaptive:0.6x2@40/3").unwrap();
+        assert_eq!(a.adaptive, Some(Adaptive { target_snr_db: 40.0, max_rounds: 3 }));
+        assert_eq!(parse("adaptive:0.6x2@40").unwrap().adaptive.map(|a| a.max_rounds), Some(DEFAULT_ROUNDS));
+    }
+
+    #[test]
+    fn bad_names_and_settings_are_refused_with_the_reason() {
+        for (name, needle) in [
+            ("nope", "unknown protocol"),
+            ("hadamard", "needs settings"),
+            ("hadamard:0.1x2", "duration"),
+            ("hadamard:1x0", "repetitions"),
+            ("hadamard:1", "DxR"),
+            ("paper:1x1", "no settings"),
+            ("adaptive:1x2@x", "SNR"),
+            ("adaptive:1x1@30", "at least 2 periods"),
+            ("adaptive:1x2@30/0", "rounds"),
+            ("interleaved:inf", "finite"),
+        ] {
+            let err = parse(name).unwrap_err().to_string();
+            assert!(err.contains(needle), "{name}: {err}");
+        }
+    }
+}
