@@ -7,7 +7,8 @@
 //! (a crash mid-append tears at most the last line) and reported; `DatasetWriter::resume` rewrites the journal
 //! without it.
 //!
-//! Kinds: `batch` (a committed batch file, with its size, SHA-256 and keys), `compaction` (a file that replaces the
+//! Kinds: `batch` (a committed batch file, with its size, SHA-256 and keys, and optionally the writer's session
+//! `state` after it, a JSON object the recipe defines), `compaction` (a file that replaces the
 //! batches it lists in `supersedes`), `quarantine` (a file taken out of the dataset by resume, with the reason) and
 //! `forced-resume` (a resume that accepted a changed configuration, with the differences).
 
