@@ -122,3 +122,42 @@ fn a_changed_configuration_is_refused_saying_what_changed_and_proceeds_when_forc
     assert_eq!((summary.committed_now, summary.committed), (3 - committed, 3));
     assert_eq!(Dataset::open(dir.path()).unwrap().len(), 3 * scene.actuators.len());
 }
+
+/// One scan run of the first `points` of the homogeneous scene's 7 x 5 plan on a fresh lab (a restarted program).
+fn run_homogeneous(
+    points: usize,
+    out_dir: &std::path::Path,
+    resume: bool,
+    control: &RunControl,
+    observer: &mut dyn metaplate_recipes::Observer,
+) -> Result<metaplate_recipes::scan::ScanSummary, RecipeError> {
+    let scene = metaplate_core::scene::Scene::builtin("homogeneous").unwrap();
+    let (lab, plan) = common::lab_and_plan(&scene, 7, 5);
+    let mut rig = lab.rig().unwrap();
+    let plan = common::prefix(&plan, points);
+    scan(&mut rig, &plan, None, &quick_config(), &output(out_dir, &scene, resume), control, observer)
+}
+
+#[test]
+fn a_resumed_run_continues_at_the_velocity_range_the_interrupted_one_had_widened_to() {
+    // The homogeneous plate clips at the configured 0.1 m/s: the first point widens the range, kept for the run.
+    const POINTS: usize = 4;
+    let reference_dir = tempfile::tempdir().unwrap();
+    run_homogeneous(POINTS, reference_dir.path(), false, &RunControl::new(), &mut Silent).unwrap();
+
+    let dir = tempfile::tempdir().unwrap();
+    let control = RunControl::new();
+    control.stop_after_commits(1);
+    let mut events = Recorder::default();
+    let err = run_homogeneous(POINTS, dir.path(), false, &control, &mut events).unwrap_err();
+    assert!(matches!(err, RecipeError::Interrupted { committed: 2 }), "{err}");
+    let widened = events.0.iter().any(|e| matches!(e, Event::Retry { reason, .. } if reason == "clipped"));
+    assert!(widened, "the interrupted run widened the range before it stopped");
+
+    let mut events = Recorder::default();
+    run_homogeneous(POINTS, dir.path(), true, &RunControl::new(), &mut events).unwrap();
+    assert_eq!(started_done(&events.0), 2);
+    let clipped_again = events.0.iter().any(|e| matches!(e, Event::Retry { reason, .. } if reason == "clipped"));
+    assert!(!clipped_again, "the resumed run starts at the widened range, so it does not clip again");
+    assert_same_rows(&image(reference_dir.path()), &image(dir.path()), "resumed at the widened range vs uninterrupted");
+}

@@ -87,6 +87,8 @@ pub fn compact(dir: impl AsRef<Path>) -> Result<CompactReport, StoreError> {
         sample_rate_hz: dataset.sample_rate_hz(),
         keys: order.iter().map(|&row| dataset.rows()[row].key()).collect(),
         supersedes: superseded.clone(),
+        // The state after the last batch it replaces: a resume after the compaction continues from it.
+        state: live.batches.iter().rev().find_map(|b| b.state.clone()),
     };
     if let Err(e) = journal.append(&JournalEntry::Compaction(entry.clone()), &budget) {
         if journal.broken().is_none() {

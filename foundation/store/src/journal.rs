@@ -7,7 +7,8 @@
 //! (a crash mid-append tears at most the last line) and reported; `DatasetWriter::resume` rewrites the journal
 //! without it.
 //!
-//! Kinds: `batch` (a committed batch file, with its size, SHA-256 and keys), `compaction` (a file that replaces the
+//! Kinds: `batch` (a committed batch file, with its size, SHA-256 and keys, and optionally the writer's session
+//! `state` after it, a JSON object the recipe defines), `compaction` (a file that replaces the
 //! batches it lists in `supersedes`), `quarantine` (a file taken out of the dataset by resume, with the reason) and
 //! `forced-resume` (a resume that accepted a changed configuration, with the differences).
 
@@ -49,6 +50,11 @@ pub struct BatchEntry {
     /// For a compaction: the batch files this one replaces.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub supersedes: Vec<String>,
+    /// For a batch: the writer's session state after it (a JSON object the recipe defines, such as the velocity
+    /// range in force), committed atomically with its rows so that a resume continues from it. Absent in lines
+    /// written before it existed, and in compactions.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub state: Option<serde_json::Map<String, serde_json::Value>>,
 }
 
 impl BatchEntry {
@@ -356,6 +362,7 @@ mod tests {
             sample_rate_hz: 24_000.5,
             keys: keys.to_vec(),
             supersedes: Vec::new(),
+            state: None,
         })
     }
 
@@ -374,6 +381,20 @@ mod tests {
             format!("{:08x}", crc32fast::hash(body.as_bytes())),
             &text[at + CRC_FIELD.len()..at + CRC_FIELD.len() + 8]
         );
+    }
+
+    #[test]
+    fn a_batch_line_without_state_still_reads_and_one_with_state_round_trips() {
+        // A line as written before the field existed: no `state`.
+        let old = encode_line(0, &entry("batch-000000.parquet", &[(0, 0)])).unwrap();
+        assert!(!old.contains("state"), "an absent state is not written: {old}");
+        let JournalEntry::Batch(batch) = decode_line(old.trim_end_matches('\n')).unwrap().entry else { panic!() };
+        assert_eq!(batch.state, None);
+        let JournalEntry::Batch(mut with_state) = entry("batch-000001.parquet", &[(1, 0)]) else { unreachable!() };
+        with_state.state = serde_json::json!({"velocity_range_m_s": 1.0}).as_object().cloned();
+        let line = encode_line(1, &JournalEntry::Batch(with_state.clone())).unwrap();
+        let decoded = decode_line(line.trim_end_matches('\n')).unwrap();
+        assert_eq!(decoded.entry, JournalEntry::Batch(with_state));
     }
 
     #[test]

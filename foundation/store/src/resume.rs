@@ -44,6 +44,10 @@ pub struct ResumeReport {
     /// Differences between the dataset's metadata and the expected one, accepted because `force` was set (empty
     /// otherwise).
     pub forced_differences: Vec<String>,
+    /// The session state committed with the last committed batch that verified and carries one (see
+    /// [`DatasetWriter::commit_batch_with_state`]): what the run continues from. `None` when no such batch exists
+    /// (a fresh dataset, or one written without state).
+    pub state: Option<serde_json::Map<String, Value>>,
     /// Bytes read and checksummed.
     pub verified_bytes: u64,
     /// Wall-clock time of the whole resume, s.
@@ -119,7 +123,13 @@ impl DatasetWriter {
                 index.restore(&batch.file, &batch.keys, ir_len, batch.sample_rate_hz).map_err(|e| e.to_string())
             });
             match restored {
-                Ok(()) => good.push(batch.info()),
+                Ok(()) => {
+                    good.push(batch.info());
+                    // Live batches are in commit order (a compaction replaces all batches before it).
+                    if batch.state.is_some() {
+                        report.state.clone_from(&batch.state);
+                    }
+                }
                 Err(reason) => {
                     // Journal first: from then on no reader takes the file for part of the dataset.
                     journal.append(

@@ -121,6 +121,21 @@ impl DatasetWriter {
     /// then resume or retry); [`StoreError::Io`] / [`StoreError::Parquet`]; [`StoreError::Poisoned`] after a failure
     /// that left the journal's state unknown (resume to continue).
     pub fn commit_batch(&mut self, records: &[IrRecord]) -> Result<BatchInfo, StoreError> {
+        self.commit_batch_with_state(records, None)
+    }
+
+    /// [`commit_batch`](Self::commit_batch), with the writer's session `state` after this batch (a JSON object the
+    /// caller defines) in the same journal line: the rows and the state are committed together or not at all, and
+    /// [`DatasetWriter::resume`] hands back the state of the last committed batch
+    /// ([`ResumeReport::state`](crate::ResumeReport::state)).
+    ///
+    /// # Errors
+    /// As [`commit_batch`](Self::commit_batch).
+    pub fn commit_batch_with_state(
+        &mut self,
+        records: &[IrRecord],
+        state: Option<serde_json::Map<String, serde_json::Value>>,
+    ) -> Result<BatchInfo, StoreError> {
         if let Some(reason) = self.journal.broken() {
             return Err(StoreError::Poisoned { dir: self.dir.clone(), reason: reason.to_string() });
         }
@@ -141,6 +156,7 @@ impl DatasetWriter {
             sample_rate_hz: checked.sample_rate_hz(),
             keys: checked.keys().to_vec(),
             supersedes: Vec::new(),
+            state,
         };
         test_commit_pause();
         if let Err(e) = self.journal.append(&JournalEntry::Batch(entry.clone()), &self.budget) {

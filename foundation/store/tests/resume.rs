@@ -116,6 +116,41 @@ fn a_batch_file_without_its_journal_line_is_quarantined_and_its_keys_re_measured
     assert_eq!(Dataset::open(dir.path()).unwrap().len(), 6);
 }
 
+/// `{"velocity_range_m_s": v}`.
+fn range_state(v: f64) -> Option<serde_json::Map<String, serde_json::Value>> {
+    serde_json::json!({ "velocity_range_m_s": v }).as_object().cloned()
+}
+
+#[test]
+fn resume_returns_the_state_of_the_last_committed_batch_or_of_the_one_before_a_torn_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut writer = DatasetWriter::create(dir.path(), meta(), IfExists::Refuse).unwrap();
+    // A batch without state (as before the field existed), then two with.
+    writer.commit_batch(&records(&[(0, 0)], &[0, 1], 32)).unwrap();
+    writer.commit_batch_with_state(&records(&[(1, 0)], &[0, 1], 32), range_state(1.0)).unwrap();
+    writer.commit_batch_with_state(&records(&[(2, 0)], &[0, 1], 32), range_state(10.0)).unwrap();
+    drop(writer);
+    let (writer, report) = DatasetWriter::resume(dir.path(), &meta(), false).unwrap();
+    assert_eq!(report.state, range_state(10.0), "the last batch's state");
+    drop(writer);
+    // Power lost mid-append of the last line: its rows and its state are not committed, the previous ones are.
+    let journal_path = dir.path().join(JOURNAL_FILE);
+    let journal = fs::read(&journal_path).unwrap();
+    fs::write(&journal_path, &journal[..journal.len() - 40]).unwrap();
+    let (writer, report) = DatasetWriter::resume(dir.path(), &meta(), false).unwrap();
+    assert!(report.journal_issues[0].torn_tail, "{:?}", report.journal_issues);
+    assert_eq!(report.committed.len(), 4);
+    assert_eq!(report.state, range_state(1.0), "the state of the batch before the torn line");
+    drop(writer);
+    // A compaction carries the state on; a dataset without any state resumes with none.
+    compact(dir.path()).unwrap();
+    let (_, report) = DatasetWriter::resume(dir.path(), &meta(), false).unwrap();
+    assert_eq!(report.state, range_state(1.0), "after a compaction");
+    let plain = tempfile::tempdir().unwrap();
+    three_batches(plain.path());
+    assert_eq!(DatasetWriter::resume(plain.path(), &meta(), false).unwrap().1.state, None);
+}
+
 #[test]
 fn a_torn_last_journal_line_is_ignored_reported_and_cut_away() {
     let dir = tempfile::tempdir().unwrap();

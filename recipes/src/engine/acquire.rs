@@ -1,6 +1,6 @@
 //! One acquisition, with the one retry policy every plan uses: a recording with a gap, an underrun or a clipped
 //! sample is repeated up to the policy's count; clipping first asks the vibrometer for a wider velocity range (kept
-//! for the rest of the run). Every repeat is counted and reported as an [`Event::Retry`].
+//! for the rest of the run, and committed with each unit so that a resume continues with it). Every repeat is counted and reported as an [`Event::Retry`].
 
 use crate::drive::DrivePlayback;
 use crate::engine::session::{Acquisition, Instruments};

@@ -52,6 +52,43 @@ impl Acquisition {
     }
 }
 
+/// The session state that changes later measurements (today the velocity range in force): committed with every
+/// unit (in its journal line, atomically with its rows) and restored on resume from the last committed unit, so that
+/// what a unit measures depends only on the scene, the seed, the unit, its attempts and what was committed before
+/// it, never on whether the run was interrupted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SessionState {
+    /// Velocity range requested of the vibrometer, m/s (the configured one, widened tenfold at each clipping).
+    pub velocity_range_m_s: f64,
+}
+
+impl SessionState {
+    const VELOCITY_RANGE_KEY: &'static str = "velocity_range_m_s";
+
+    /// The state as the journal stores it: `{"velocity_range_m_s": ...}`.
+    pub fn to_json(self) -> serde_json::Map<String, serde_json::Value> {
+        let mut map = serde_json::Map::new();
+        map.insert(Self::VELOCITY_RANGE_KEY.into(), self.velocity_range_m_s.into());
+        map
+    }
+
+    /// Reads a state that [`to_json`](Self::to_json) wrote (other keys, from a later version, are ignored).
+    ///
+    /// # Errors
+    /// [`RecipeError::Config`] if the velocity range is missing, not a number, or not finite and positive.
+    pub fn from_json(map: &serde_json::Map<String, serde_json::Value>) -> Result<Self, RecipeError> {
+        let range = map.get(Self::VELOCITY_RANGE_KEY).and_then(serde_json::Value::as_f64);
+        match range {
+            Some(v) if v.is_finite() && v > 0.0 => Ok(Self { velocity_range_m_s: v }),
+            _ => Err(RecipeError::Config(format!(
+                "the committed session state {} has no valid {} (finite, > 0)",
+                serde_json::Value::Object(map.clone()),
+                Self::VELOCITY_RANGE_KEY
+            ))),
+        }
+    }
+}
+
 /// A device failure, sorted by the remedy.
 #[derive(Debug)]
 pub(crate) enum Fault {
@@ -139,13 +176,13 @@ pub struct Instruments<'a> {
 
 impl<'a> Instruments<'a> {
     /// Validates the wiring and configures the DAQ (velocity and loopback inputs) and the audio interface, with
-    /// recovery as `policy` says; the velocity range is set on first use.
+    /// recovery as `policy` says; the velocity range of `state` is set on first use.
     ///
     /// # Errors
     /// [`RecipeError::Config`] for an invalid wiring; device errors that recovery cannot fix.
     pub fn new(
         rig: &'a mut Rig,
-        max_velocity_m_s: f64,
+        state: SessionState,
         policy: RecoveryPolicy,
         control: &RunControl,
         observer: &mut dyn Observer,
@@ -157,7 +194,7 @@ impl<'a> Instruments<'a> {
             rig,
             daq_config,
             audio_config,
-            max_velocity_m_s,
+            max_velocity_m_s: state.velocity_range_m_s,
             scale: None,
             policy,
             beam_m: None,
@@ -166,6 +203,11 @@ impl<'a> Instruments<'a> {
         me.with_recovery(control, observer, |i| i.configure())?;
         me.recovered = false;
         Ok(me)
+    }
+
+    /// The session state now: what a unit committed now hands on to the next.
+    pub fn state(&self) -> SessionState {
+        SessionState { velocity_range_m_s: self.max_velocity_m_s }
     }
 
     /// Where the beam was last sent, m.

@@ -24,7 +24,7 @@ use crate::engine::acquire::{AcquisitionProblem, RetryPolicy, acquire, record_sa
 use crate::engine::aim::{AimPolicy, aim};
 use crate::engine::now_unix_us;
 use crate::engine::run::Run;
-use crate::engine::session::{Acquisition, Instruments, RecoveryPolicy};
+use crate::engine::session::{Acquisition, Instruments, RecoveryPolicy, SessionState};
 use crate::error::RecipeError;
 use crate::events::{Event, Observer, RunControl};
 use crate::output::Output;
@@ -188,7 +188,8 @@ pub fn calibrate(
     let done_before = (0..total).filter(|a| is_committed(*a)).count();
     let todo: Vec<usize> = (0..total).filter(|a| !is_committed(*a)).collect();
     run.start(total, done_before, observer);
-    let mut instruments = Instruments::new(rig, cfg.max_velocity_m_s, cfg.recovery, control, observer)?;
+    let state = run.session_state(SessionState { velocity_range_m_s: cfg.max_velocity_m_s });
+    let mut instruments = Instruments::new(rig, state, cfg.recovery, control, observer)?;
     let fs = instruments.daq_rate_hz();
     let sweep = excitation(&cfg.sweep, fs)?;
     let deconv = DeconvConfig { sample_rate_hz: fs, ..cfg.deconv };
@@ -206,7 +207,7 @@ pub fn calibrate(
         };
         let records = result.records(actuator, site, fs)?;
         let status = result.calibration.status.as_str();
-        run.commit(&records, actuator, None, status, control, observer)?;
+        run.commit(&records, instruments.state(), actuator, None, status, control, observer)?;
         tracing::info!(
             actuator,
             deviation_db = result.calibration.flatness.deviation_db(),

@@ -35,7 +35,7 @@ use crate::engine::aim::AimPolicy;
 use crate::engine::now_unix_us;
 use crate::engine::reference::{ReferenceCheck, ReferenceSpec};
 use crate::engine::run::Run;
-use crate::engine::session::{Instruments, RecoveryPolicy};
+use crate::engine::session::{Instruments, RecoveryPolicy, SessionState};
 use crate::error::RecipeError;
 use crate::events::{Event, Observer, RunControl};
 use crate::output::Output;
@@ -211,7 +211,8 @@ pub fn scan(
     let done_before = total - todo.len();
     run.start(total, done_before, observer);
 
-    let mut instruments = Instruments::new(rig, cfg.max_velocity_m_s, cfg.recovery, control, observer)?;
+    let state = run.session_state(SessionState { velocity_range_m_s: cfg.max_velocity_m_s });
+    let mut instruments = Instruments::new(rig, state, cfg.recovery, control, observer)?;
     let fs = instruments.daq_rate_hz();
     let volts_per_fs = instruments.rig.wiring.loopback_volts_per_full_scale;
     let protocol = &cfg.protocol;
@@ -268,6 +269,9 @@ pub fn scan(
         });
         let mut main = todo;
         let mut in_flight = false;
+        // Per point, the session state after its last acquisition: what it commits (the next point may have been
+        // acquired, and widened the range, before it commits).
+        let mut state_after = std::collections::HashMap::new();
         loop {
             let next = if control.stop_requested() {
                 None
@@ -281,7 +285,9 @@ pub fn scan(
             let job = match next {
                 Some(point) => {
                     reference.after_recovery(&mut instruments, control, observer)?;
-                    acquisition.acquire_point(&mut book, &mut instruments, point, control, observer)?
+                    let job = acquisition.acquire_point(&mut book, &mut instruments, point, control, observer)?;
+                    state_after.insert(point, instruments.state());
+                    job
                 }
                 None => None,
             };
@@ -294,7 +300,8 @@ pub fn scan(
                 match book.settle(point, aimed, outcomes)? {
                     Settled::Commit(rows) => {
                         let records = point_records(&plan.grid, point, rows, ir_len, fs, now_unix_us())?;
-                        commit_point(&mut run, &mut summary, point, records, control, observer)?;
+                        let state = state_after.get(&point).copied().unwrap_or_else(|| instruments.state());
+                        commit_point(&mut run, &mut summary, (point, records, state), control, observer)?;
                     }
                     Settled::Deferred { visit, reasons } => {
                         let reasons = reasons.join("; ");
@@ -325,8 +332,7 @@ pub fn scan(
 fn commit_point(
     run: &mut Run,
     summary: &mut ScanSummary,
-    point: usize,
-    records: Vec<(metaplate_store::IrRecord, Status)>,
+    (point, records, state): (usize, Vec<(metaplate_store::IrRecord, Status)>, SessionState),
     control: &RunControl,
     observer: &mut dyn Observer,
 ) -> Result<(), RecipeError> {
@@ -342,7 +348,7 @@ fn commit_point(
     let records: Vec<_> = records.into_iter().map(|(r, _)| r).collect();
     let snr_db = median(&mut snrs);
     tracing::info!(point, status = worst.as_str(), snr_db, "point committed");
-    summary.commit_s += run.commit(&records, point, snr_db, worst.as_str(), control, observer)?;
+    summary.commit_s += run.commit(&records, state, point, snr_db, worst.as_str(), control, observer)?;
     summary.committed_now += 1;
     summary.committed = run.done();
     Ok(())
