@@ -4,13 +4,15 @@
 //! - [`acquire`]: one acquisition with the one retry policy (gaps, underruns, clipping);
 //! - [`aim`]: the beam on a point, with deterministic nudges;
 //! - [`reference`]: the re-measure of a committed reference point after a recovery;
-//! - [`run`]: the run skeleton every plan shares (open or resume the dataset, started, commit and checkpoint per
-//!   unit, stopped or finished).
+//! - [`plan`]: what the engine asks of a plan (the [`plan::Plan`] trait, steps, verdicts);
+//! - [`run`]: the engine's loop, [`run::run`], that runs any plan (open or resume the dataset, started, steps
+//!   acquired while the last is processed, commit and checkpoint per unit, stopped or finished).
 //!
 //! Dependencies point one way: the plans (`crate::plans`) use the engine; the engine never names a plan.
 
 pub mod acquire;
 pub mod aim;
+pub mod plan;
 pub mod reference;
 pub mod run;
 pub mod session;

@@ -13,17 +13,15 @@ use crate::events::{Event, Observer, RunControl};
 use metaplate_dsp::accuracy::relative_error_db;
 
 /// What the reference check re-measures and how it judges it: the narrow part of a scan's configuration it needs.
-#[derive(Debug, Clone, Copy)]
-pub struct ReferenceSpec<'a> {
-    /// The dataset directory holding the committed responses.
-    pub dir: &'a std::path::Path,
+#[derive(Debug, Clone)]
+pub struct ReferenceSpec {
     /// The plan's points, in order: the first committed valid or re-measured is the reference.
-    pub points: &'a [usize],
+    pub points: Vec<usize>,
     /// The scan's protocol: its sweep, repetitions and deconvolution (their rates replaced by the DAQ's), played
     /// by one actuator alone.
-    pub protocol: &'a ExcitationProtocol,
+    pub protocol: ExcitationProtocol,
     /// Each actuator's inverse filter, if the scan is compensated.
-    pub filters: Option<&'a [KirkebyFilter]>,
+    pub filters: Option<Vec<KirkebyFilter>>,
     /// Deviation above which the check warns, dB.
     pub limit_db: f64,
     /// The scan's SNR gate: a re-measure below it (a dropout in the middle) is repeated, not compared.
@@ -42,7 +40,9 @@ pub struct ReferenceSpec<'a> {
 /// in the same units. The deviation is logged and reported as [`Event::ReferenceChecked`]; above
 /// [`crate::engine::session::RecoveryPolicy::reference_limit_db`] it is a warning (the scan goes on: a person decides).
 pub(crate) struct ReferenceCheck<'a> {
-    spec: ReferenceSpec<'a>,
+    spec: ReferenceSpec,
+    /// The dataset directory holding the committed responses.
+    dir: &'a std::path::Path,
     actuator: usize,
     /// Loaded at the first check.
     reference: Option<Reference>,
@@ -52,9 +52,9 @@ pub(crate) struct ReferenceCheck<'a> {
 type Reference = (usize, (f64, f64), Vec<f64>);
 
 impl<'a> ReferenceCheck<'a> {
-    /// The check of `spec`, on actuator 0.
-    pub(crate) fn new(spec: ReferenceSpec<'a>) -> Self {
-        Self { spec, actuator: 0, reference: None }
+    /// The check of `spec` against the dataset in `dir`, on actuator 0.
+    pub(crate) fn new(spec: ReferenceSpec, dir: &'a std::path::Path) -> Self {
+        Self { spec, dir, actuator: 0, reference: None }
     }
 
     /// If a device was recovered since the last call, re-measures the reference point and reports the deviation;
@@ -107,13 +107,13 @@ impl<'a> ReferenceCheck<'a> {
 
     /// The plan's first point whose reference row is committed as valid or re-measured.
     fn load(&self) -> Result<Option<Reference>, RecipeError> {
-        let dataset = match Dataset::open(self.spec.dir) {
+        let dataset = match Dataset::open(self.dir) {
             Ok(d) => d,
             Err(StoreError::EmptyDataset { .. }) => return Ok(None),
             Err(e) => return Err(e.into()),
         };
         let key = self.actuator as u16;
-        for &p in self.spec.points {
+        for &p in &self.spec.points {
             let (Some(meta), Some(ir)) = (dataset.meta(p as u32, key), dataset.ir(p as u32, key)) else {
                 continue;
             };
@@ -136,12 +136,12 @@ impl<'a> ReferenceCheck<'a> {
     ) -> Result<Option<Vec<f64>>, RecipeError> {
         const ATTEMPTS: u32 = 3;
         let fs = instruments.daq_rate_hz();
-        let protocol = self.spec.protocol;
+        let protocol = &self.spec.protocol;
         let sweep = excitation(&protocol.sweep, fs)?;
         let deconv = DeconvConfig { sample_rate_hz: fs, ..protocol.deconv };
         // The scan's tail: the response and the longest filter.
-        let fir_len = self.spec.filters.map_or(0, |f| f.iter().map(|k| k.taps.len()).max().unwrap_or(0));
-        let filter = self.spec.filters.and_then(|f| f.get(self.actuator));
+        let fir_len = self.spec.filters.as_ref().map_or(0, |f| f.iter().map(|k| k.taps.len()).max().unwrap_or(0));
+        let filter = self.spec.filters.as_ref().and_then(|f| f.get(self.actuator));
         let playback = DrivePlayback::new(&sweep, protocol.repetitions, deconv.ir_len + fir_len, filter)?;
         let buffers = playback.audio_buffers(&instruments.rig.wiring, self.actuator, fs)?;
         let record = record_samples(&playback, fs);

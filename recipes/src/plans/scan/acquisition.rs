@@ -1,68 +1,46 @@
-//! The scan's acquisition of a point: the beam aimed, then every pending actuator recorded (one at a time, or every
-//! shot of a simultaneous protocol, round after round for an adaptive one), each recording through the engine's
-//! `acquire` with the scan's retry policy.
+//! The scan's recording of a point (the engine has aimed): every pending actuator recorded (one at a time, or every
+//! shot of a simultaneous protocol, round after round for an adaptive one), each through the engine's `acquire`
+//! with the scan's retry policy.
 
 use metaplate_dsp::deconv::DeconvConfig;
-use metaplate_dsp::excitation::{Decoder, ExcitationProtocol};
+use metaplate_dsp::excitation::ExcitationProtocol;
 
 use crate::drive::{AudioPlayback, DrivePlayback};
-use crate::engine::acquire::{RetryPolicy, acquire};
-use crate::engine::aim::aim;
+use crate::engine::aim::Aimed;
+use crate::engine::plan::Lab;
 use crate::engine::session::Instruments;
 use crate::error::RecipeError;
-use crate::events::{Observer, RunControl};
 use crate::plans::calibrate::Calibration;
-use crate::plans::scan::points::{PointBook, Problem};
-use crate::plans::scan::processing::{Channel, Gates, Job, Work};
+use crate::plans::scan::GridScan;
+use crate::plans::scan::points::Problem;
+use crate::plans::scan::processing::{Channel, Job, ScanProcessor, Work};
 use crate::plans::scan::simultaneous::{Averager, Simultaneous};
-use crate::plans::scan::{ScanConfig, ScanPlan};
 
-/// What the scan's acquisition needs, fixed for the run.
-pub(crate) struct PointAcquisition<'p> {
-    pub plan: &'p ScanPlan,
-    pub cfg: &'p ScanConfig,
-    /// Each actuator's playback at the audio rate (sequential protocols).
-    pub playbacks: &'p [AudioPlayback],
-    /// The simultaneous protocol, if the scan plays one.
-    pub simultaneous: Option<&'p Simultaneous>,
-    /// The protocol's decoder at the DAQ rate (adaptive rounds are decoded here, to decide on the next).
-    pub decoder: &'p Decoder,
-    pub gates: &'p Gates,
-    pub actuators: usize,
-    /// Samples per DAQ channel to record per acquisition.
-    pub record: usize,
-    /// How often an unusable acquisition is repeated.
-    pub retry: RetryPolicy,
-}
-
-impl PointAcquisition<'_> {
-    /// Aims at `point` and records every actuator still to measure there; `None` if abandoned on request.
-    pub(crate) fn acquire_point(
-        &self,
-        book: &mut PointBook,
-        instruments: &mut Instruments<'_>,
+impl GridScan<'_> {
+    /// Records every actuator still to measure at `point` (`pending`; the beam already at `aimed`); `None` if
+    /// abandoned on request.
+    pub(super) fn record_point(
+        &mut self,
         point: usize,
-        control: &RunControl,
-        observer: &mut dyn Observer,
+        pending: &[usize],
+        aimed: Aimed,
+        processor: &ScanProcessor,
+        lab: &mut Lab<'_, '_>,
     ) -> Result<Option<Job>, RecipeError> {
-        let (visit, pending) = book.visit(point);
-        let position = self.plan.grid.position_m(point);
-        let aimed = aim(instruments, position, (self.cfg.seed, point as u64, visit), &self.cfg.aim, control, observer)?;
-        if let Some(sim) = self.simultaneous {
-            let work = match self.acquire_simultaneous(book, instruments, point, &pending, sim, control, observer)? {
+        if let Some(sim) = &processor.simultaneous {
+            let work = match self.record_simultaneous(point, pending, sim, processor, lab)? {
                 Some(work) => work,
                 None => return Ok(None),
             };
             return Ok(Some(Job { point, aimed, work }));
         }
         let mut channels = Vec::with_capacity(pending.len());
-        for actuator in pending {
+        for &actuator in pending {
             let buffers = self.playbacks[actuator].buffers();
-            let Some(acquired) = acquire(instruments, &buffers, self.record, self.retry, point, control, observer)?
-            else {
+            let Some(acquired) = lab.acquire(&buffers, self.record, point)? else {
                 return Ok(None);
             };
-            book.count_acquisitions(point, actuator, acquired.attempts);
+            self.book.count_acquisitions(point, actuator, acquired.attempts);
             let problem = acquired.problem.map(Problem::from);
             channels.push(Channel { actuator, acquisition: acquired.acquisition, problem });
         }
@@ -71,17 +49,15 @@ impl PointAcquisition<'_> {
 
     /// Plays every shot of a simultaneous protocol at `point` (the beam already there), round after round for an
     /// adaptive one; `None` if abandoned on request.
-    #[allow(clippy::too_many_arguments)] // The plan's book, the session, the point and its shots, control, observer.
-    fn acquire_simultaneous(
-        &self,
-        book: &mut PointBook,
-        instruments: &mut Instruments<'_>,
+    fn record_simultaneous(
+        &mut self,
         point: usize,
         pending: &[usize],
         sim: &Simultaneous,
-        control: &RunControl,
-        observer: &mut dyn Observer,
+        processor: &ScanProcessor,
+        lab: &mut Lab<'_, '_>,
     ) -> Result<Option<Work>, RecipeError> {
+        let gates = &processor.gates;
         let mut rounds = Averager::new(self.actuators);
         let max_rounds = sim.adaptive.map_or(1, |a| a.max_rounds);
         let mut retries = 0;
@@ -94,8 +70,7 @@ impl PointAcquisition<'_> {
                     .buffers(shot)
                     .ok_or_else(|| RecipeError::Internal(format!("shot {shot} has no buffers")))?;
                 // Each shot is converted with its own scale, so a round may mix velocity ranges after a clip.
-                let Some(acquired) = acquire(instruments, &buffers, self.record, self.retry, point, control, observer)?
-                else {
+                let Some(acquired) = lab.acquire(&buffers, self.record, point)? else {
                     return Ok(None);
                 };
                 retries += acquired.attempts - 1;
@@ -103,7 +78,7 @@ impl PointAcquisition<'_> {
                 acquisitions.push(acquired.acquisition);
             }
             for &a in pending {
-                book.count_acquisitions(point, a, retries + u32::from(rounds.count == 0));
+                self.book.count_acquisitions(point, a, retries + u32::from(rounds.count == 0));
             }
             retries = 0;
             let Some(adaptive) = sim.adaptive else {
@@ -112,17 +87,17 @@ impl PointAcquisition<'_> {
             // Adaptive: decode this round now, to decide whether another is needed.
             if worst.is_some() {
                 let decoded = Err(Problem::Processing("an acquisition of the round failed".into()));
-                return Ok(Some(Work::Done(sim.outcomes(pending, decoded, worst, self.gates))));
+                return Ok(Some(Work::Done(sim.outcomes(pending, decoded, worst, gates))));
             }
-            match sim.decode(self.decoder, &acquisitions, self.gates) {
+            match sim.decode(&processor.decoder, &acquisitions, gates) {
                 Ok(results) => rounds.add(&results),
-                Err(problem) => return Ok(Some(Work::Done(sim.outcomes(pending, Err(problem), None, self.gates)))),
+                Err(problem) => return Ok(Some(Work::Done(sim.outcomes(pending, Err(problem), None, gates)))),
             }
             let snrs = rounds.snr_db(pending);
             let reached = snrs.iter().all(|s| s.is_some_and(|s| s >= adaptive.target_snr_db));
             if reached || rounds.count >= max_rounds {
                 let averaged = rounds.averaged();
-                let mut outcomes = sim.outcomes(pending, Ok(averaged), None, self.gates);
+                let mut outcomes = sim.outcomes(pending, Ok(averaged), None, gates);
                 for (outcome, snr) in outcomes.iter_mut().zip(snrs) {
                     if outcome.2.is_none() && snr.is_none_or(|s| s < adaptive.target_snr_db) {
                         outcome.2 = Some(Problem::Unreached {

@@ -1,9 +1,9 @@
 //! The grid scan plan: every unmasked point, every actuator, the compensated excitation, deconvolution, quality
 //! gates, bounded retries, a deferred re-measure queue, and one commit per point.
 //!
-//! Acquisition (the instruments, on this thread) and processing (deconvolution, on a worker thread) overlap: point
-//! k is processed while point k + 1 is acquired, so the instruments set the pace. Results come back in the order
-//! the points were sent, so commits are in a deterministic order.
+//! The scan is a [`crate::engine::plan::Plan`]: a step is a visit of a point; the engine aims, records it and
+//! processes it on its worker thread while the next point is acquired (the path's next point is known without the
+//! last one's result; deferred points wait until nothing is in flight).
 //!
 //! Per point and actuator, each acquisition goes through the engine's `acquire` (gaps, underruns, clipping:
 //! repeated up to `max_attempts` times, clipping widening the velocity range), then is processed and gated (SNR,
@@ -19,31 +19,31 @@ pub(crate) mod points;
 mod processing;
 mod simultaneous;
 
-use std::collections::{BTreeMap, VecDeque};
-use std::sync::mpsc;
+use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
 use metaplate_core::grid::GridSpec;
 use metaplate_core::rig::Rig;
 use metaplate_dsp::deconv::DeconvConfig;
 use metaplate_dsp::excitation::{ExcitationProtocol, Scheme};
+use metaplate_dsp::stats::median;
 use metaplate_store::{DatasetMeta, Status};
 use serde_json::{Map, Value, json};
 
-use crate::drive::excitation;
+use crate::drive::{AudioPlayback, excitation};
 use crate::engine::acquire::{RetryPolicy, record_samples, record_samples_for};
-use crate::engine::aim::AimPolicy;
+use crate::engine::aim::{AimPolicy, Aimed};
 use crate::engine::now_unix_us;
-use crate::engine::reference::{ReferenceCheck, ReferenceSpec};
-use crate::engine::run::Run;
-use crate::engine::session::{Instruments, RecoveryPolicy, SessionState};
+use crate::engine::plan::{AimAt, Lab, Next, Plan, Settings, Step, Verdict};
+use crate::engine::reference::ReferenceSpec;
+use crate::engine::run::run;
+use crate::engine::session::{Instruments, RecoveryPolicy};
 use crate::error::RecipeError;
-use crate::events::{Event, Observer, RunControl};
+use crate::events::{Observer, RunControl};
 use crate::output::Output;
 use crate::plans::calibrate::Calibration;
-use acquisition::{PointAcquisition, build_playbacks};
-use metaplate_dsp::stats::median;
+use acquisition::build_playbacks;
 use points::{PointBook, Settled, point_records, severity};
-use processing::{Gates, Job, Processed, process};
+use processing::{Gates, Job, Processed, ScanProcessor};
 use simultaneous::Simultaneous;
 
 /// Recipe name in the manifest.
@@ -154,7 +154,7 @@ impl ScanConfig {
     }
 }
 
-/// What a finished (or stopped) scan did.
+/// What a finished scan did.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ScanSummary {
     /// Points committed by this run.
@@ -196,160 +196,227 @@ pub fn scan(
             c.filters.len()
         )));
     }
-    let meta = DatasetMeta::new(
-        RECIPE,
-        cfg.to_json(plan, calibration.map(|c| c.content_hash.as_str())),
-        out.scene.clone(),
-        out.software_version.clone(),
-        cfg.seed,
-        plan.grid,
-    );
-    let mut run = Run::open(out, meta, rig.clock.clone(), control)?;
-    let is_committed = |p: usize| (0..actuators).all(|a| run.committed_keys.contains(&(p as u32, a as u16)));
-    let todo: VecDeque<usize> = plan.points.iter().copied().filter(|&p| !is_committed(p)).collect();
-    let total = plan.points.len();
-    let done_before = total - todo.len();
-    run.start(total, done_before, observer);
-
-    let state = run.session_state(SessionState { velocity_range_m_s: cfg.max_velocity_m_s });
-    let mut instruments = Instruments::new(rig, state, cfg.recovery, control, observer)?;
-    let fs = instruments.daq_rate_hz();
-    let volts_per_fs = instruments.rig.wiring.loopback_volts_per_full_scale;
-    let protocol = &cfg.protocol;
-    let sweep = excitation(&protocol.sweep, fs)?;
-    let deconv = DeconvConfig { sample_rate_hz: fs, ..protocol.deconv };
-    // One decoder for the run: the sequential path decodes each actuator's acquisition with it as it comes.
-    let decoder = protocol.decoder(actuators, &deconv)?;
-    let (playbacks, simultaneous, record) = if protocol.is_simultaneous() {
-        let sim = Simultaneous::new(&instruments, protocol, &deconv, calibration)?;
-        let record = record_samples_for(sim.playback.daq_len, fs);
-        (Vec::new(), Some(sim), record)
-    } else {
-        let playbacks = build_playbacks(&instruments, &sweep, protocol, &deconv, calibration)?;
-        let record = record_samples(&playbacks.0, fs);
-        (playbacks.1, None, record)
-    };
-    let gates = Gates { min_snr_db: cfg.min_snr_db, max_drift_ppm: cfg.max_drift_ppm, volts_per_fs };
-
-    let acquisition = PointAcquisition {
-        plan,
-        cfg,
-        playbacks: &playbacks,
-        simultaneous: simultaneous.as_ref(),
-        decoder: &decoder,
-        gates: &gates,
-        actuators,
-        record,
+    let settings = Settings {
+        max_velocity_m_s: cfg.max_velocity_m_s,
         retry: RetryPolicy { max_attempts: cfg.max_attempts },
+        aim: cfg.aim,
+        seed: cfg.seed,
+        recovery: cfg.recovery,
     };
-    let mut book = PointBook::new(actuators, cfg.deferred_visits);
-    let mut summary = ScanSummary { total, committed: done_before, ..ScanSummary::default() };
-    let ir_len = deconv.ir_len;
-    let result = std::thread::scope(|scope| -> Result<(), RecipeError> {
-        let (job_tx, job_rx) = mpsc::channel::<Job>();
-        let (done_tx, done_rx) = mpsc::channel::<Processed>();
-        let decoder = &decoder;
-        let gates = &gates;
-        let simultaneous = simultaneous.as_ref();
-        scope.spawn(move || {
-            for job in job_rx {
-                if done_tx.send(process(job, decoder, simultaneous, gates)).is_err() {
-                    break;
-                }
-            }
-        });
-        let mut reference = ReferenceCheck::new(ReferenceSpec {
-            dir: &out.dir,
-            points: &plan.points,
-            protocol: &cfg.protocol,
-            filters: calibration.map(|c| c.filters.as_slice()),
-            limit_db: cfg.recovery.reference_limit_db,
-            min_snr_db: cfg.min_snr_db,
-            retry: acquisition.retry,
-        });
-        let mut main = todo;
-        let mut in_flight = false;
-        // Per point, the session state after its last acquisition: what it commits (the next point may have been
-        // acquired, and widened the range, before it commits).
-        let mut state_after = std::collections::HashMap::new();
-        loop {
-            let next = if control.stop_requested() {
-                None
-            } else if let Some(p) = main.pop_front() {
-                Some(p)
-            } else if !in_flight {
-                book.deferred.pop_front()
-            } else {
-                None
-            };
-            let job = match next {
-                Some(point) => {
-                    reference.after_recovery(&mut instruments, control, observer)?;
-                    let job = acquisition.acquire_point(&mut book, &mut instruments, point, control, observer)?;
-                    state_after.insert(point, instruments.state());
-                    job
-                }
-                None => None,
-            };
-            if in_flight {
-                let processed = done_rx
-                    .recv()
-                    .map_err(|_| RecipeError::Internal("the processing thread stopped unexpectedly".into()))?;
-                in_flight = false;
-                let Processed { point, aimed, outcomes } = processed;
-                match book.settle(point, aimed, outcomes)? {
-                    Settled::Commit(rows) => {
-                        let records = point_records(&plan.grid, point, rows, ir_len, fs, now_unix_us())?;
-                        let state = state_after.get(&point).copied().unwrap_or_else(|| instruments.state());
-                        commit_point(&mut run, &mut summary, (point, records, state), control, observer)?;
-                    }
-                    Settled::Deferred { visit, reasons } => {
-                        let reasons = reasons.join("; ");
-                        tracing::info!(point, visit, %reasons, "point deferred");
-                        let reason = format!("deferred: {reasons}");
-                        observer.event(&Event::Retry { unit: point, attempt: visit, reason });
-                    }
-                }
-            }
-            if let Some(job) = job {
-                job_tx.send(job).map_err(|_| RecipeError::Internal("the processing thread stopped".into()))?;
-                in_flight = true;
-            }
-            if !in_flight && (control.stop_requested() || (main.is_empty() && book.deferred.is_empty())) {
-                break;
-            }
-        }
-        Ok(())
-    });
-    result?;
-    summary.clock_s = run.elapsed_s();
-    summary.deferred = book.deferred_points;
-    run.finish(observer)?;
-    Ok(summary)
+    let mut grid_scan = GridScan::new(plan, calibration, cfg, actuators);
+    let report = run(&mut grid_scan, settings, rig, out, control, observer)?;
+    Ok(ScanSummary {
+        committed_now: report.committed_now,
+        committed: report.committed,
+        total: report.total,
+        statuses: grid_scan.statuses,
+        deferred: grid_scan.book.deferred_points,
+        clock_s: report.clock_s,
+        commit_s: report.commit_s,
+    })
 }
 
-/// Commits a settled point's records through the run, counting their statuses in `summary`.
-fn commit_point(
-    run: &mut Run,
-    summary: &mut ScanSummary,
-    (point, records, state): (usize, Vec<(metaplate_store::IrRecord, Status)>, SessionState),
-    control: &RunControl,
-    observer: &mut dyn Observer,
-) -> Result<(), RecipeError> {
-    let mut worst = Status::Valid;
-    let mut snrs = Vec::new();
-    for (record, status) in &records {
-        snrs.extend(record.meta.snr_db);
-        if severity(*status) > severity(worst) {
-            worst = *status;
+/// The scan as a plan: the points still to visit, the book of what each point needs, and what the rig's
+/// configuration decided (playbacks, recording length).
+struct GridScan<'a> {
+    plan: &'a ScanPlan,
+    calibration: Option<&'a Calibration>,
+    cfg: &'a ScanConfig,
+    actuators: usize,
+    /// Points not yet visited, in path order.
+    main: VecDeque<usize>,
+    book: PointBook,
+    /// Each actuator's playback at the audio rate (sequential protocols; set up with the rig).
+    playbacks: Vec<AudioPlayback>,
+    /// Samples per DAQ channel to record per acquisition.
+    record: usize,
+    ir_len: usize,
+    fs: f64,
+    /// Rows committed by this run, by status.
+    statuses: BTreeMap<&'static str, usize>,
+}
+
+impl<'a> GridScan<'a> {
+    fn new(plan: &'a ScanPlan, calibration: Option<&'a Calibration>, cfg: &'a ScanConfig, actuators: usize) -> Self {
+        Self {
+            plan,
+            calibration,
+            cfg,
+            actuators,
+            main: VecDeque::new(),
+            book: PointBook::new(actuators, cfg.deferred_visits),
+            playbacks: Vec::new(),
+            record: 0,
+            ir_len: cfg.protocol.deconv.ir_len,
+            fs: 0.0,
+            statuses: BTreeMap::new(),
         }
-        *summary.statuses.entry(status.as_str()).or_default() += 1;
     }
-    let records: Vec<_> = records.into_iter().map(|(r, _)| r).collect();
-    let snr_db = median(&mut snrs);
-    tracing::info!(point, status = worst.as_str(), snr_db, "point committed");
-    summary.commit_s += run.commit(&records, state, point, snr_db, worst.as_str(), control, observer)?;
-    summary.committed_now += 1;
-    summary.committed = run.done();
-    Ok(())
+
+    /// A visit of `point`: the beam on it (nudged elsewhere on a re-visit), its actuators still to measure.
+    fn visit(&mut self, point: usize) -> Step<Vec<usize>> {
+        let (visit, pending) = self.book.visit(point);
+        Step { unit: point, aim: Some(AimAt { position_m: self.plan.grid.position_m(point), visit }), detail: pending }
+    }
+}
+
+impl Plan for GridScan<'_> {
+    type Detail = Vec<usize>;
+    type Processor = ScanProcessor;
+
+    fn meta(&self, out: &Output) -> DatasetMeta {
+        DatasetMeta::new(
+            RECIPE,
+            self.cfg.to_json(self.plan, self.calibration.map(|c| c.content_hash.as_str())),
+            out.scene.clone(),
+            out.software_version.clone(),
+            self.cfg.seed,
+            self.plan.grid,
+        )
+    }
+
+    fn start(&mut self, committed: &BTreeSet<(u32, u16)>) -> (usize, usize) {
+        let actuators = self.actuators;
+        let is_committed = |p: usize| (0..actuators).all(|a| committed.contains(&(p as u32, a as u16)));
+        self.main = self.plan.points.iter().copied().filter(|&p| !is_committed(p)).collect();
+        let total = self.plan.points.len();
+        (total, total - self.main.len())
+    }
+
+    fn setup(&mut self, instruments: &Instruments<'_>) -> Result<ScanProcessor, RecipeError> {
+        let fs = instruments.daq_rate_hz();
+        let protocol = &self.cfg.protocol;
+        let sweep = excitation(&protocol.sweep, fs)?;
+        let deconv = DeconvConfig { sample_rate_hz: fs, ..protocol.deconv };
+        // One decoder for the run: the sequential path decodes each actuator's acquisition with it as it comes.
+        let decoder = protocol.decoder(self.actuators, &deconv)?;
+        let simultaneous = if protocol.is_simultaneous() {
+            let sim = Simultaneous::new(instruments, protocol, &deconv, self.calibration)?;
+            self.record = record_samples_for(sim.playback.daq_len, fs);
+            Some(sim)
+        } else {
+            let (first, playbacks) = build_playbacks(instruments, &sweep, protocol, &deconv, self.calibration)?;
+            self.record = record_samples(&first, fs);
+            self.playbacks = playbacks;
+            None
+        };
+        self.fs = fs;
+        self.ir_len = deconv.ir_len;
+        let volts_per_fs = instruments.rig.wiring.loopback_volts_per_full_scale;
+        let gates = Gates { min_snr_db: self.cfg.min_snr_db, max_drift_ppm: self.cfg.max_drift_ppm, volts_per_fs };
+        Ok(ScanProcessor { decoder, simultaneous, gates })
+    }
+
+    fn reference(&self) -> Option<ReferenceSpec> {
+        Some(ReferenceSpec {
+            points: self.plan.points.clone(),
+            protocol: self.cfg.protocol.clone(),
+            filters: self.calibration.map(|c| c.filters.clone()),
+            limit_db: self.cfg.recovery.reference_limit_db,
+            min_snr_db: self.cfg.min_snr_db,
+            retry: RetryPolicy { max_attempts: self.cfg.max_attempts },
+        })
+    }
+
+    /// The path's points first; deferred points once the path is done and nothing is in flight (a point in flight
+    /// may yet be deferred, and re-visits follow the order of deferral).
+    fn next(&mut self, in_flight: bool) -> Next<Vec<usize>> {
+        if let Some(point) = self.main.pop_front() {
+            return Next::Step(self.visit(point));
+        }
+        if in_flight {
+            return Next::Wait;
+        }
+        match self.book.deferred.pop_front() {
+            Some(point) => Next::Step(self.visit(point)),
+            None => Next::Done,
+        }
+    }
+
+    fn record(
+        &mut self,
+        step: &Step<Vec<usize>>,
+        aimed: Option<Aimed>,
+        processor: &ScanProcessor,
+        lab: &mut Lab<'_, '_>,
+    ) -> Result<Option<Job>, RecipeError> {
+        let aimed = aimed.ok_or_else(|| RecipeError::Internal("a scan step without aiming".into()))?;
+        self.record_point(step.unit, &step.detail, aimed, processor, lab)
+    }
+
+    fn settle(&mut self, processed: Processed) -> Result<Verdict, RecipeError> {
+        let Processed { point, aimed, outcomes } = processed;
+        match self.book.settle(point, aimed, outcomes)? {
+            Settled::Commit(rows) => {
+                let records = point_records(&self.plan.grid, point, rows, self.ir_len, self.fs, now_unix_us())?;
+                let mut worst = Status::Valid;
+                let mut snrs = Vec::new();
+                for (record, status) in &records {
+                    snrs.extend(record.meta.snr_db);
+                    if severity(*status) > severity(worst) {
+                        worst = *status;
+                    }
+                    *self.statuses.entry(status.as_str()).or_default() += 1;
+                }
+                let records = records.into_iter().map(|(r, _)| r).collect();
+                Ok(Verdict::Commit { unit: point, records, status: worst, snr_db: median(&mut snrs) })
+            }
+            Settled::Deferred { visit, reasons } => {
+                let reasons = reasons.join("; ");
+                tracing::info!(point, visit, %reasons, "point deferred");
+                Ok(Verdict::Continue { retry: Some((point, visit, format!("deferred: {reasons}"))) })
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plans::scan::points::Problem;
+
+    const HERE: Aimed = Aimed { x_m: 0.0, y_m: 0.0, level: 1.0 };
+
+    fn step_unit(next: Next<Vec<usize>>) -> (usize, u32, Vec<usize>) {
+        let Next::Step(step) = next else { panic!("a step, got {next:?}") };
+        (step.unit, step.aim.map_or(u32::MAX, |a| a.visit), step.detail)
+    }
+
+    #[test]
+    fn the_path_runs_ahead_of_results_and_deferred_points_wait_until_nothing_is_in_flight() {
+        let grid = GridSpec { nx: 3, ny: 1, spacing_m: 0.01, origin_x_m: 0.0, origin_y_m: 0.0 };
+        let plan = ScanPlan { grid, points: vec![0, 1, 2] };
+        let cfg = ScanConfig::default();
+        let mut scan = GridScan::new(&plan, None, &cfg, 2);
+        // What `setup` sets from the rig.
+        scan.fs = 24_000.0;
+        // Point 0 committed by an earlier run (both actuators); point 1 half committed is measured again whole.
+        assert_eq!(scan.start(&BTreeSet::from([(0, 0), (0, 1), (1, 0)])), (3, 1));
+        assert_eq!(step_unit(scan.next(false)), (1, 0, vec![0, 1]));
+        // The next path point needs no result: it is handed out while point 1 is in flight.
+        assert_eq!(step_unit(scan.next(true)), (2, 0, vec![0, 1]));
+        let low = |a| (a, Some((vec![0.1], Some(5.0))), Some(Problem::LowSnr(5.0)));
+        let good = |a| (a, Some((vec![1.0], Some(40.0))), None);
+        let verdict = scan.settle(Processed { point: 1, aimed: HERE, outcomes: vec![good(0), low(1)] }).unwrap();
+        assert!(matches!(verdict, Verdict::Continue { retry: Some((1, 1, _)) }), "{verdict:?}");
+        // Deferred point 1 waits while point 2 is in flight (2 may be deferred too, and re-visits keep order).
+        assert_eq!(scan.next(true), Next::Wait);
+        let Verdict::Commit { unit, status, .. } =
+            scan.settle(Processed { point: 2, aimed: HERE, outcomes: vec![good(0), good(1)] }).unwrap()
+        else {
+            panic!("point 2 commits")
+        };
+        assert_eq!((unit, status), (2, Status::Valid));
+        // The re-visit: only the failing actuator, on visit 1 (nudged).
+        assert_eq!(step_unit(scan.next(false)), (1, 1, vec![1]));
+        assert_eq!(scan.next(true), Next::Wait);
+        let Verdict::Commit { status, records, .. } =
+            scan.settle(Processed { point: 1, aimed: HERE, outcomes: vec![good(1)] }).unwrap()
+        else {
+            panic!("point 1 commits")
+        };
+        assert_eq!((status, records.len()), (Status::Valid, 2));
+        assert_eq!(scan.next(false), Next::Done);
+        assert_eq!(scan.statuses.get("valid"), Some(&4));
+    }
 }

@@ -4,6 +4,7 @@
 use metaplate_dsp::excitation::Decoder;
 
 use crate::engine::aim::Aimed;
+use crate::engine::plan::Processor;
 use crate::engine::session::Acquisition;
 use crate::plans::scan::points::{Outcome, Problem};
 use crate::plans::scan::simultaneous::Simultaneous;
@@ -48,8 +49,26 @@ pub(crate) struct Gates {
     pub volts_per_fs: f64,
 }
 
+/// The scan's processing, shared with the engine's worker thread: the protocol's decoder at the DAQ rate (adaptive
+/// rounds are also decoded while recording, to decide on the next), the simultaneous protocol if the scan plays one,
+/// and the gates.
+pub(crate) struct ScanProcessor {
+    pub decoder: Decoder,
+    pub simultaneous: Option<Simultaneous>,
+    pub gates: Gates,
+}
+
+impl Processor for ScanProcessor {
+    type Recorded = Job;
+    type Processed = Processed;
+
+    fn process(&self, job: Job) -> Processed {
+        process(job, &self.decoder, self.simultaneous.as_ref(), &self.gates)
+    }
+}
+
 /// Deconvolves and gates every channel of a job (on the worker thread).
-pub(crate) fn process(job: Job, decoder: &Decoder, simultaneous: Option<&Simultaneous>, gates: &Gates) -> Processed {
+fn process(job: Job, decoder: &Decoder, simultaneous: Option<&Simultaneous>, gates: &Gates) -> Processed {
     let outcomes = match (job.work, simultaneous) {
         (Work::Channels(channels), _) => process_channels(channels, decoder, gates),
         (Work::Shots { pending, acquisitions, problem }, Some(sim)) => {
