@@ -141,7 +141,8 @@ fn fatal_overrun_ends_the_acquisition_with_a_typed_error() {
 }
 
 /// A recipe-like loop under a seeded fault schedule: reads 300 blocks; after an error it reopens (on a
-/// disconnect), stops and starts again; it records what happened.
+/// disconnect), stops, re-applies the configuration and starts again, as the recipes' recovery does; it records
+/// what happened.
 fn run_seeded(seed: u64) -> Vec<String> {
     let rates = FaultRates { stall: 0.02, max_stall_reads: 4, disconnect: 0.01, overrun: 0.02 };
     let transport = MockTransport::new(common::sine_device(), FaultSchedule::seeded(seed, rates, 2000));
@@ -150,14 +151,22 @@ fn run_seeded(seed: u64) -> Vec<String> {
         Ok(d) => d,
         Err(e) => return vec![format!("open: {e}")],
     };
-    let mut running = daq.configure(&two_channels()).is_ok() && daq.start().is_ok();
-    let mut reopen = false;
+    // A disconnect can hit any exchange, the first configuration's included: every failed step that says so is
+    // followed by a reopen.
+    let is_disconnect = |e: &DaqError| matches!(e, DaqError::Disconnected { .. });
+    let first = daq.configure(&two_channels()).and_then(|()| daq.start());
+    let mut reopen = first.as_ref().is_err_and(is_disconnect);
+    let mut running = first.is_ok();
     for _ in 0..300 {
         if !running {
             if reopen {
                 reopen = daq.reopen().is_err();
             }
-            running = !reopen && daq.stop().is_ok() && daq.start().is_ok();
+            if !reopen {
+                let restart = daq.stop().and_then(|()| daq.configure(&two_channels())).and_then(|()| daq.start());
+                reopen = restart.as_ref().is_err_and(is_disconnect);
+                running = restart.is_ok();
+            }
             log.push(format!("recover {running}"));
             continue;
         }
