@@ -41,4 +41,11 @@ if [ ${#python_packages[@]} -gt 0 ]; then
     "$venv_dir/bin/python" -m pip install --quiet --disable-pip-version-check "${python_packages[@]}"
 fi
 
+# The test runner: cargo-nextest runs every test binary's tests in parallel across binaries (the suite's long tests
+# sit in different binaries, so `cargo test`, one binary at a time, leaves a core idle for minutes). This machine
+# kind ships it; elsewhere it is built once from crates.io (a few minutes).
+if ! cargo nextest --version >/dev/null 2>&1; then
+    cargo install cargo-nextest --locked
+fi
+
 echo "install-deps: done"
