@@ -91,15 +91,19 @@ fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) 
         .wavelength
         .iter()
         .map(|w| match &w.summary {
-            Ok(s) => json!({"freq_hz": w.freq_hz, "median_m": s.median_m, "iqr_m": [s.iqr_m.0, s.iqr_m.1]}),
-            Err(e) => json!({"freq_hz": w.freq_hz, "median_m": null, "iqr_m": null, "error": e.to_string()}),
+            Ok(s) => json!({"freq_hz": w.freq_hz, "median_m": s.median_m, "iqr_m": [s.iqr_m.0, s.iqr_m.1],
+                "in_range": w.in_range, "actuators_flagged": s.flagged}),
+            Err(e) => json!({"freq_hz": w.freq_hz, "median_m": null, "iqr_m": null, "in_range": false,
+                "error": e.to_string()}),
         })
         .collect();
-    let (mut rank, mut kappa) = (serde_json::Map::new(), serde_json::Map::new());
+    let (mut rank, mut kappa, mut domain_points) =
+        (serde_json::Map::new(), serde_json::Map::new(), serde_json::Map::new());
     for (edge_m, a) in &report.authority {
         let key = edge_key(*edge_m);
         match a {
             Ok(a) => {
+                domain_points.insert(key.clone(), json!(a.points.len()));
                 rank.insert(key.clone(), json!(a.mean_effective_rank()));
                 kappa.insert(key, json!(a.mean_condition_number()));
             }
@@ -114,7 +118,23 @@ fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) 
     let refresh = report.refresh.as_ref().map_err(|e| keep("refresh".into(), e)).ok();
     let response = report.driven_response.as_ref().map_err(|e| keep("driven_response".into(), e)).ok();
     let pixels = pixels.map_err(|e| keep("pixel_area".into(), e)).ok();
+    let (lattice, range) = (&report.lattice, &report.resolvable);
     json!({
+        "lattice": {
+            "nx": lattice.grid.nx,
+            "ny": lattice.grid.ny,
+            "spacing_m": range.spacing_m,
+            "stride": lattice.stride,
+            "fill": range.fill,
+        },
+        "wavelength_resolvable": {
+            "nyquist_k_rad_m": range.nyquist_k_rad_m,
+            "shortest_m": range.shortest_wavelength_m,
+            "aperture_m": range.aperture_m,
+            "longest_m": range.longest_wavelength_m,
+            "note": "k-space estimates outside [shortest_m, longest_m], or on a lattice filled below 50 %, have \
+                     in_range false: the lattice aliases shorter waves, the aperture biases longer ones short",
+        },
         "wavelength": wavelength,
         "median_pixel_area_cm2": pixels.and_then(PixelAreaMap::median_area_cm2),
         "pixel_area_flagged_fraction": pixels.map(PixelAreaMap::flagged_fraction),
@@ -122,6 +142,7 @@ fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) 
         "pod_energy": pod.map(|p| p.energy.iter().take(64).collect::<Vec<_>>()),
         "effective_rank": rank,
         "condition_number": kappa,
+        "points_per_domain": domain_points,
         "refresh_ms": refresh.map(|r| r.refresh_s * 1e3),
         "driven_response": response.map(|r| r.freqs_hz.iter().zip(&r.mean_magnitude)
             .map(|(f, m)| json!({"freq_hz": f, "mean_abs": m})).collect::<Vec<_>>()),
@@ -132,18 +153,33 @@ fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) 
 fn print_table(out: &Value) {
     let show = |v: &Value| v.as_f64().map_or_else(|| "-".to_owned(), |x| format!("{x:.2}"));
     println!("dataset {} ({}, {} points)", out["dataset"], out["scene"], out["points"]);
+    let lattice = &out["lattice"];
+    let range = &out["wavelength_resolvable"];
+    let cm = |v: &Value| v.as_f64().map_or_else(|| "-".to_owned(), |x| format!("{:.1}", x * 100.0));
+    println!(
+        "lattice {} x {} at {} cm (every {} grid point(s), {:.0} % filled): wavelengths {} to {} cm resolvable",
+        lattice["nx"],
+        lattice["ny"],
+        cm(&lattice["spacing_m"]),
+        lattice["stride"],
+        lattice["fill"].as_f64().unwrap_or(f64::NAN) * 100.0,
+        cm(&range["shortest_m"]),
+        cm(&range["longest_m"]),
+    );
     println!("median pixel area (cm^2)   {}", show(&out["median_pixel_area_cm2"]));
     println!("POD components (99 %)      {}", out["pod_components_99"]);
     for key in ["9.5", "6.5", "3.5"] {
         println!(
-            "d = {key} cm: effective rank {}, condition number {}",
+            "d = {key} cm ({} points): effective rank {}, condition number {}",
+            out["points_per_domain"][key],
             show(&out["effective_rank"][key]),
             show(&out["condition_number"][key])
         );
     }
     println!("refresh (ms)               {}", show(&out["refresh_ms"]));
     for w in out["wavelength"].as_array().into_iter().flatten() {
-        println!("wavelength at {:>5} Hz: {} m", w["freq_hz"], show(&w["median_m"]));
+        let outside = if w["in_range"] == true { "" } else { "  (outside the resolvable range)" };
+        println!("wavelength at {:>5} Hz: {} cm{outside}", w["freq_hz"], cm(&w["median_m"]));
     }
     if let Some(errors) = out["errors"].as_object() {
         for (k, e) in errors {
