@@ -7,18 +7,20 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::colour::{MASKED, diverging, viridis};
-use crate::render::{FONT, Figure, FigureError, Written, save};
+use crate::render::{FONT, Figure, FigureError, Written, plain_number, save};
 
 /// Values on a grid, drawn cell by cell.
 struct MapPanel<'a> {
     title: String,
-    values: &'a [Option<f64>],
+    values: std::borrow::Cow<'a, [Option<f64>]>,
     colour: fn(f64) -> RGBColor,
     /// Maps a value to the colour map's argument.
     scale: (f64, f64),
 }
 
 struct Maps<'a> {
+    /// Above every panel: what the figure shows, with its numbers.
+    title: String,
     grid: GridSpec,
     panels: Vec<MapPanel<'a>>,
     /// A colour bar under the maps: (label, low, high).
@@ -30,10 +32,11 @@ impl Figure for Maps<'_> {
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
         root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let root = root.titled(&self.title, (FONT, 17)).map_err(|e| e.to_string())?;
         let (maps, bar_area) = match self.bar {
             Some(_) => {
                 let h = root.dim_in_pixel().1;
-                root.split_vertically(h.saturating_sub(80))
+                root.split_vertically(h.saturating_sub(100))
             }
             None => root.split_vertically(root.dim_in_pixel().1),
         };
@@ -71,6 +74,8 @@ impl Maps<'_> {
             .disable_mesh()
             .x_desc("x (cm)")
             .y_desc("y (cm)")
+            .x_label_formatter(&|v: &f64| plain_number(*v))
+            .y_label_formatter(&|v: &f64| plain_number(*v))
             .label_style((FONT, 13))
             .axis_desc_style((FONT, 14))
             .draw()
@@ -103,7 +108,7 @@ fn draw_bar<DB: DrawingBackend>(
         .margin_left(60)
         .margin_right(60)
         .margin_bottom(5)
-        .x_label_area_size(35)
+        .x_label_area_size(50)
         .build_cartesian_2d(lo..hi, 0.0..1.0)
         .map_err(|e| e.to_string())?;
     chart
@@ -111,6 +116,7 @@ fn draw_bar<DB: DrawingBackend>(
         .disable_mesh()
         .disable_y_axis()
         .x_desc(label)
+        .x_label_formatter(&|v: &f64| plain_number(*v))
         .label_style((FONT, 13))
         .axis_desc_style((FONT, 14))
         .draw()
@@ -139,7 +145,7 @@ fn check_len(figure: &'static str, grid: &GridSpec, values: &[Option<f64>]) -> R
 
 /// Focus snapshots (paper, Fig. 4A, B): the focused field on the grid at a few instants, side by side, each
 /// `(title, one value per grid point or None where unmeasured)`; a common diverging colour scale, normalised by the
-/// largest magnitude over all snapshots.
+/// largest magnitude over all snapshots, on a continuous red-blue map with its bar; `title` above all of them.
 ///
 /// # Errors
 /// [`FigureError::InvalidData`] for no snapshot, a snapshot not one value per grid point, or no finite value;
@@ -149,6 +155,7 @@ pub fn focus_snapshots(
     name: &str,
     grid: &GridSpec,
     snapshots: &[(String, Vec<Option<f64>>)],
+    title: &str,
 ) -> Result<Written, FigureError> {
     if snapshots.is_empty() {
         return Err(FigureError::InvalidData { figure: "focus snapshots", reason: "no snapshot".to_owned() });
@@ -164,11 +171,22 @@ pub fn focus_snapshots(
     if peak <= 0.0 {
         return Err(FigureError::InvalidData { figure: "focus snapshots", reason: "no non-zero value".to_owned() });
     }
+    // Normalised by the peak, so that the bar's -1 to 1 and the maps' colours are one scale.
     let panels = snapshots
         .iter()
-        .map(|(title, values)| MapPanel { title: title.clone(), values, colour: diverging, scale: (0.0, peak) })
+        .map(|(title, values)| MapPanel {
+            title: title.clone(),
+            values: values.iter().map(|v| v.map(|v| v / peak)).collect::<Vec<_>>().into(),
+            colour: diverging,
+            scale: (0.0, 1.0),
+        })
         .collect();
-    let figure = Maps { grid: *grid, panels, bar: Some(("velocity / peak".to_owned(), -1.0, 1.0)) };
+    let figure = Maps {
+        title: title.to_owned(),
+        grid: *grid,
+        panels,
+        bar: Some(("velocity / peak velocity over all instants".to_owned(), -1.0, 1.0)),
+    };
     let width = 420 * snapshots.len().min(6) as u32;
     save(&figure, dir, name, (width.max(600), 420))
 }
@@ -193,7 +211,8 @@ pub fn pixel_area_map(
         return Err(FigureError::InvalidData { figure: "pixel-area map", reason: "no finite area".to_owned() });
     }
     let hi = if hi > lo { hi } else { lo + 1.0 };
-    let panels = vec![MapPanel { title: title.to_owned(), values: area_cm2, colour: viridis, scale: (lo, hi) }];
-    let figure = Maps { grid: *grid, panels, bar: Some(("pixel area (cm^2)".to_owned(), lo, hi)) };
-    save(&figure, dir, name, (900, 560))
+    let panels = vec![MapPanel { title: String::new(), values: area_cm2.into(), colour: viridis, scale: (lo, hi) }];
+    let figure =
+        Maps { title: title.to_owned(), grid: *grid, panels, bar: Some(("pixel area (cm²)".to_owned(), lo, hi)) };
+    save(&figure, dir, name, (1000, 600))
 }
