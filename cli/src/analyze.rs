@@ -81,7 +81,11 @@ pub fn analyse_dataset(data: &Path, figures: Option<&Path>) -> anyhow::Result<Va
     out["points"] = json!(g.n_points());
     out["actuators"] = json!(g.n_actuators());
     if let Some(dir) = figures {
-        let written = write_figures(dir, &scene_id.name, &g, &report, pixels.as_ref(), &out)?;
+        let overlay = scene.as_ref().map_or_else(figures::PlateOverlay::default, |s| figures::PlateOverlay {
+            actuators_m: s.actuators.iter().map(|a| (a.x_m, a.y_m)).collect(),
+            supports_m: s.supports.iter().map(|p| (p.x_m, p.y_m)).collect(),
+        });
+        let written = write_figures(dir, &scene_id.name, &g, &report, pixels.as_ref(), &out, &overlay)?;
         out["figures"] = json!(written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
     }
     Ok(out)
@@ -345,6 +349,7 @@ fn write_figures(
     report: &PlateReport,
     pixels: Result<&PixelAreaMap, &AnalysisError>,
     analysis: &Value,
+    overlay: &figures::PlateOverlay,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut written = Vec::new();
     let mut add = |w: figures::Written| written.extend([w.png, w.svg]);
@@ -363,24 +368,26 @@ fn write_figures(
         }
         let (x, y) = lattice.grid.position_m(lattice.indices[row] as usize);
         let title = format!(
-            "{label}: focus at ({:.1}, {:.1}) cm, {:.0} to {:.0} Hz, {}",
+            "{label}: focus at ({:.1}, {:.1}) cm, {:.0} to {:.0} Hz, {}{}",
             x * 100.0,
             y * 100.0,
             opts.band.lo_hz,
             opts.band.hi_hz,
-            lattice_text(analysis)
+            lattice_text(analysis),
+            overlay_key(overlay)
         );
-        add(figures::focus_snapshots(dir, "focus_snapshots", &lattice.grid, &snaps, &title)?);
+        add(figures::focus_snapshots(dir, "focus_snapshots", &lattice.grid, &snaps, &title, overlay)?);
     }
     if let Ok(p) = pixels
         && let Some(median) = p.median_area_cm2()
     {
         let values: Vec<f64> = p.area_cm2.iter().map(|a| a.unwrap_or(f64::NAN)).collect();
         let title = format!(
-            "{label}: virtual-pixel area, median {median:.2} cm² ({} of {} points closed), 75 to 400 Hz, {}",
+            "{label}: virtual-pixel area, median {median:.2} cm² ({} of {} points closed), 75 to 400 Hz, {}{}",
             p.area_cm2.iter().flatten().count(),
             p.area_cm2.len(),
-            lattice_text(analysis)
+            lattice_text(analysis),
+            overlay_key(overlay)
         );
         add(figures::pixel_area_map(
             dir,
@@ -388,6 +395,7 @@ fn write_figures(
             &lattice.grid,
             &on_grid(&lattice.grid, &lattice.indices, &values),
             &title,
+            overlay,
         )?);
     }
     if let Ok(pod) = &report.pod {
@@ -417,6 +425,11 @@ fn write_figures(
         add(figures::driven_response(dir, "driven_response", &[figures::Curve { label: label.to_owned(), points }])?);
     }
     Ok(written)
+}
+
+/// The key to the overlay's marks, for a map's title ("" without marks).
+fn overlay_key(overlay: &figures::PlateOverlay) -> &'static str {
+    if overlay.actuators_m.is_empty() && overlay.supports_m.is_empty() { "" } else { "; ▲ actuators, ■ supports" }
 }
 
 /// Row of `g` nearest the frame origin (the plate centre); `indices[row]` is that row's index on `grid`.

@@ -3,8 +3,8 @@
 //! plotters 0.3.7 rasterises text (feature `ab_glyph`) by placing every glyph's bitmap at the pen's whole-pixel
 //! position, dropping the glyph's left bearing and truncating its vertical offset: a decimal point lands against the
 //! digit before it and a pixel high ("3'2" for 3.2), and letters crowd or gap ("ar ea"). [`Glyphs`] wraps the
-//! bitmap backend and draws text itself with the same font, the same layout box (so charts lay out as before) and
-//! the same baseline, but each glyph positioned with its bearing at subpixel precision.
+//! bitmap backend and draws text itself with the same font and the same layout box (so charts lay out as before),
+//! each glyph positioned with its bearing at subpixel precision, on a baseline that keeps the text inside its box.
 
 use ab_glyph::{Font, FontRef, PxScale, ScaleFont, point};
 use plotters::prelude::BitMapBackend;
@@ -122,8 +122,10 @@ impl DrawingBackend for Glyphs<'_> {
         let font = self.font.as_scaled(PxScale::from(size));
         let trans = style.transform();
         let (w, h) = self.get_size();
-        // plotters' baseline: half the size below the box's top.
-        let baseline = size / 2.0;
+        // The baseline one ascent below the box's top, so that the text hangs inside its box. plotters put it at
+        // half the size, which lifts capitals and digits about a quarter of the size above the box: under an axis
+        // they then run into the tick marks, and a tick over a decimal point reads "3'6" for 3.6.
+        let baseline = font.ascent();
         let mut pen = 0.0f32;
         let mut prev = None;
         for c in text.chars() {

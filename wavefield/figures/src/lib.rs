@@ -14,7 +14,7 @@ mod plots;
 mod render;
 mod tradeoff;
 
-pub use maps::{focus_snapshots, pixel_area_map};
+pub use maps::{PlateOverlay, focus_snapshots, pixel_area_map};
 pub use plots::{
     Curve, SingularValueSeries, WavelengthReferences, WavelengthSeries, condition_numbers, driven_response, pod_energy,
     singular_value_energy, wavelength,

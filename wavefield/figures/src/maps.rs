@@ -18,9 +18,19 @@ struct MapPanel<'a> {
     scale: (f64, f64),
 }
 
+/// What is drawn over a map: where the plate is driven and held, in the grid's frame (m).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PlateOverlay {
+    /// Actuator positions, m: drawn as black triangles.
+    pub actuators_m: Vec<(f64, f64)>,
+    /// Support positions, m: drawn as black squares.
+    pub supports_m: Vec<(f64, f64)>,
+}
+
 struct Maps<'a> {
     /// Above every panel: what the figure shows, with its numbers.
     title: String,
+    overlay: &'a PlateOverlay,
     grid: GridSpec,
     panels: Vec<MapPanel<'a>>,
     /// A colour bar under the maps: (label, low, high).
@@ -62,6 +72,11 @@ impl Maps<'_> {
         let y0 = g.origin_y_m * cm - half;
         let x1 = (g.origin_x_m + (g.nx.saturating_sub(1)) as f64 * g.spacing_m) * cm + half;
         let y1 = (g.origin_y_m + (g.ny.saturating_sub(1)) as f64 * g.spacing_m) * cm + half;
+        // Actuators may sit outside the measured grid (on the plate's rim): widen the frame to show them.
+        let marks = self.overlay.actuators_m.iter().chain(&self.overlay.supports_m).map(|&(x, y)| (x * cm, y * cm));
+        let (x0, x1, y0, y1) = marks.fold((x0, x1, y0, y1), |(a, b, c, d), (x, y)| {
+            (a.min(x - 1.0), b.max(x + 1.0), c.min(y - 1.0), d.max(y + 1.0))
+        });
         let mut chart = ChartBuilder::on(area)
             .caption(&panel.title, (FONT, 18))
             .margin(10)
@@ -90,6 +105,15 @@ impl Maps<'_> {
                     _ => MASKED,
                 };
                 Rectangle::new([(x * cm - half, y * cm - half), (x * cm + half, y * cm + half)], colour.filled())
+            }))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(self.overlay.actuators_m.iter().map(|&(x, y)| TriangleMarker::new((x * cm, y * cm), 7, BLACK)))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(self.overlay.supports_m.iter().map(|&(x, y)| {
+                let r = 0.4;
+                Rectangle::new([(x * cm - r, y * cm - r), (x * cm + r, y * cm + r)], BLACK.filled())
             }))
             .map_err(|e| e.to_string())?;
         Ok(())
@@ -145,7 +169,8 @@ fn check_len(figure: &'static str, grid: &GridSpec, values: &[Option<f64>]) -> R
 
 /// Focus snapshots (paper, Fig. 4A, B): the focused field on the grid at a few instants, side by side, each
 /// `(title, one value per grid point or None where unmeasured)`; a common diverging colour scale, normalised by the
-/// largest magnitude over all snapshots, on a continuous red-blue map with its bar; `title` above all of them.
+/// largest magnitude over all snapshots, on a continuous red-blue map with its bar; `title` above all of them;
+/// `overlay`'s actuators and supports drawn on each.
 ///
 /// # Errors
 /// [`FigureError::InvalidData`] for no snapshot, a snapshot not one value per grid point, or no finite value;
@@ -156,6 +181,7 @@ pub fn focus_snapshots(
     grid: &GridSpec,
     snapshots: &[(String, Vec<Option<f64>>)],
     title: &str,
+    overlay: &PlateOverlay,
 ) -> Result<Written, FigureError> {
     if snapshots.is_empty() {
         return Err(FigureError::InvalidData { figure: "focus snapshots", reason: "no snapshot".to_owned() });
@@ -183,6 +209,7 @@ pub fn focus_snapshots(
         .collect();
     let figure = Maps {
         title: title.to_owned(),
+        overlay,
         grid: *grid,
         panels,
         bar: Some(("velocity / peak velocity over all instants".to_owned(), -1.0, 1.0)),
@@ -203,6 +230,7 @@ pub fn pixel_area_map(
     grid: &GridSpec,
     area_cm2: &[Option<f64>],
     title: &str,
+    overlay: &PlateOverlay,
 ) -> Result<Written, FigureError> {
     check_len("pixel-area map", grid, area_cm2)?;
     let finite = area_cm2.iter().flatten().filter(|v| v.is_finite());
@@ -212,7 +240,12 @@ pub fn pixel_area_map(
     }
     let hi = if hi > lo { hi } else { lo + 1.0 };
     let panels = vec![MapPanel { title: String::new(), values: area_cm2.into(), colour: viridis, scale: (lo, hi) }];
-    let figure =
-        Maps { title: title.to_owned(), grid: *grid, panels, bar: Some(("pixel area (cm²)".to_owned(), lo, hi)) };
-    save(&figure, dir, name, (1000, 600))
+    let figure = Maps {
+        title: title.to_owned(),
+        overlay,
+        grid: *grid,
+        panels,
+        bar: Some(("pixel area (cm²)".to_owned(), lo, hi)),
+    };
+    save(&figure, dir, name, (1150, 620))
 }

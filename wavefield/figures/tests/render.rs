@@ -7,8 +7,8 @@ use std::path::Path;
 
 use metaplate_core::grid::GridSpec;
 use metaplate_figures::{
-    Curve, FigureError, SingularValueSeries, WavelengthReferences, WavelengthSeries, Written, condition_numbers,
-    driven_response, focus_snapshots, pixel_area_map, pod_energy, singular_value_energy, wavelength,
+    Curve, FigureError, PlateOverlay, SingularValueSeries, WavelengthReferences, WavelengthSeries, Written,
+    condition_numbers, driven_response, focus_snapshots, pixel_area_map, pod_energy, singular_value_energy, wavelength,
 };
 
 const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n";
@@ -103,14 +103,15 @@ fn map_figures_render_to_png_and_svg() {
             .collect()
     };
     let snaps = vec![("t = -1 ms".to_owned(), field(-1.0)), ("t = 0".to_owned(), field(0.0))];
+    let overlay = PlateOverlay { actuators_m: vec![(-0.12, 0.0), (0.12, 0.0)], supports_m: vec![(0.0, 0.05)] };
     check(
-        &focus_snapshots(dir.path(), "focus", &grid, &snaps, "focus, 75 to 400 Hz").unwrap(),
+        &focus_snapshots(dir.path(), "focus", &grid, &snaps, "focus, 75 to 400 Hz", &overlay).unwrap(),
         &["x (cm)", "y (cm)", "t = 0", "75 to 400 Hz"],
     );
 
     let area: Vec<Option<f64>> = (0..grid.len()).map(|i| (i % 7 != 0).then_some(1.0 + i as f64 / 10.0)).collect();
     check(
-        &pixel_area_map(dir.path(), "area", &grid, &area, "median 2.7 cm^2").unwrap(),
+        &pixel_area_map(dir.path(), "area", &grid, &area, "median 2.7 cm^2", &overlay).unwrap(),
         &["x (cm)", "pixel area (cm²)", "median 2.7 cm^2"],
     );
 }
@@ -122,7 +123,16 @@ fn unplottable_data_is_a_typed_error() {
     let nan = [Curve { label: "nan".into(), points: vec![(f64::NAN, 1.0), (1.0, f64::INFINITY)] }];
     assert!(matches!(condition_numbers(d, "x", "", &nan, &[]), Err(FigureError::Draw { .. })));
     let grid = GridSpec::centred(3, 3, 0.005);
-    assert!(matches!(pixel_area_map(d, "x", &grid, &[None; 9], "t"), Err(FigureError::InvalidData { .. })));
-    assert!(matches!(pixel_area_map(d, "x", &grid, &[Some(1.0); 4], "t"), Err(FigureError::InvalidData { .. })));
-    assert!(matches!(focus_snapshots(d, "x", &grid, &[], ""), Err(FigureError::InvalidData { .. })));
+    assert!(matches!(
+        pixel_area_map(d, "x", &grid, &[None; 9], "t", &PlateOverlay::default()),
+        Err(FigureError::InvalidData { .. })
+    ));
+    assert!(matches!(
+        pixel_area_map(d, "x", &grid, &[Some(1.0); 4], "t", &PlateOverlay::default()),
+        Err(FigureError::InvalidData { .. })
+    ));
+    assert!(matches!(
+        focus_snapshots(d, "x", &grid, &[], "", &PlateOverlay::default()),
+        Err(FigureError::InvalidData { .. })
+    ));
 }
