@@ -400,7 +400,8 @@ fn write_figures(
     }
     if let Ok(pod) = &report.pod {
         let points = pod.energy.iter().take(64).enumerate().map(|(i, &e)| ((i + 1) as f64, e)).collect();
-        add(figures::pod_energy(dir, "pod_energy", &[figures::Curve { label: label.to_owned(), points }])?);
+        let label = format!("{label}: {} components for 99 %, {}", pod.components, lattice_text(analysis));
+        add(figures::pod_energy(dir, "pod_energy", &[figures::Curve { label, points }])?);
     }
     let domains: Vec<&DomainAuthority> = report.authority.iter().filter_map(|(_, a)| a.as_ref().ok()).collect();
     if !domains.is_empty() {

@@ -64,7 +64,7 @@ pub struct DemoArgs {
 const DISPERSION_FREQS_HZ: [f64; 6] = [75.0, 150.0, 250.0, 400.0, 500.0, 600.0];
 
 /// The default scan grid: every other point of the paper's 49 x 25 (1 cm spacing: 4 points per wavelength at
-/// 600 Hz, 3.5 x 3.5 cm authority domains hold 16 points).
+/// 600 Hz; the 3.5 x 3.5 cm authority domain, centred on the lattice point at the plate centre, holds 3 x 3 points).
 const DEFAULT_GRID: (usize, usize) = (25, 13);
 
 /// The pattern: positions as fractions of the measured area (-1..1 each way) and targets (`metaplate focus`

@@ -136,7 +136,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
         .caption(&panel.title, (FONT, 20))
         .margin(12)
         .x_label_area_size(45)
-        .y_label_area_size(70)
+        .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| e.to_string())?;
     let log_y = panel.log_y;
@@ -427,8 +427,12 @@ mod tests {
     fn log_axis_labels_are_plain_numbers() {
         let labels: Vec<String> = [2.8f64, 3.0, 1.6, 0.0, -1.5].iter().map(|v| plain_number(10f64.powf(*v))).collect();
         assert_eq!(labels, ["631", "1000", "39.8", "1", "0.0316"]);
+        assert_eq!(plain_number(10f64.powf(-2.5)), "3.2×10⁻³");
         assert_eq!(plain_number(2.5), "2.5");
         assert_eq!(plain_number(-0.5), "-0.5");
         assert_eq!(plain_number(0.0), "0");
+        assert_eq!(plain_number(10f64.powf(-4.5)), "3.2×10⁻⁵");
+        assert_eq!(plain_number(1e-4), "10⁻⁴");
+        assert_eq!(plain_number(2.5e7), "2.5×10⁷");
     }
 }
