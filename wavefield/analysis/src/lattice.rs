@@ -18,7 +18,8 @@ pub const MIN_LATTICE_FILL: f64 = 0.5;
 /// The regular lattice a set of points lies on (see the module documentation).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Lattice {
-    /// The lattice as a grid: spacing `stride` times the original's, origin at the lowest measured column and row.
+    /// The lattice as a grid: spacing `stride` times the original's, origin at the lowest measured column and row;
+    /// the original grid itself for stride 1.
     pub grid: GridSpec,
     /// Each point's flat index on [`Lattice::grid`], in the order given.
     pub indices: Vec<u32>,
@@ -38,6 +39,10 @@ impl Lattice {
         let ix0 = cells.iter().map(|c| c.0).min()?;
         let iy0 = cells.iter().map(|c| c.1).min()?;
         let stride = cells.iter().fold(0, |g, &(ix, iy)| gcd(gcd(g, ix - ix0), iy - iy0)).max(1);
+        if stride == 1 {
+            // The grid's own resolution: the grid itself, so that a full scan is analysed exactly as before.
+            return Some(Self { grid: *grid, indices: points.to_vec(), stride });
+        }
         let nx = cells.iter().map(|c| (c.0 - ix0) / stride).max()? + 1;
         let ny = cells.iter().map(|c| (c.1 - iy0) / stride).max()? + 1;
         let (origin_x_m, origin_y_m) = grid.position_m(grid.index(ix0, iy0));
