@@ -124,7 +124,7 @@ fn a_regular_subset_is_measured_on_its_own_lattice() {
     // wave at high wavenumbers; on the subset's lattice the estimate is that of the full grid within 5 %.
     let (mask, g) = (stadium_mask(), grid());
     let points: Vec<usize> =
-        measured_points().into_iter().filter(|&p| (p % NX) % 2 == 0 && (p / NX) % 2 == 0).collect();
+        measured_points().into_iter().filter(|&p| (p % NX).is_multiple_of(2) && (p / NX).is_multiple_of(2)).collect();
     let fields: Vec<Vec<Complex64>> = [0.3, 1.1, 2.0].iter().map(|&angle| plane_wave(0.06, angle)).collect();
     let layout = FieldLayout { grid: &g, points: &points, mask: &mask, local_mask: &mask, exclusions: &[] };
     let w = wavelengths_at(&response(&fields, &points), fields.len(), &layout, &DispersionOptions::default()).unwrap();
