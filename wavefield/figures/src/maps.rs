@@ -16,6 +16,8 @@ struct MapPanel<'a> {
     colour: fn(f64) -> RGBColor,
     /// Maps a value to the colour map's argument.
     scale: (f64, f64),
+    /// Outline the cells whose value is at least this (the focus's half-maximum region); `None`: no outline.
+    outline_at: Option<f64>,
 }
 
 /// What is drawn over a map: where the plate is driven and held, in the grid's frame (m).
@@ -107,6 +109,37 @@ impl Maps<'_> {
                 Rectangle::new([(x * cm - half, y * cm - half), (x * cm + half, y * cm + half)], colour.filled())
             }))
             .map_err(|e| e.to_string())?;
+        if let Some(level) = panel.outline_at {
+            let inside = |ix: isize, iy: isize| {
+                ix >= 0
+                    && iy >= 0
+                    && (ix as usize) < g.nx
+                    && (iy as usize) < g.ny
+                    && panel.values[g.index(ix as usize, iy as usize)].is_some_and(|v| v >= level)
+            };
+            // Each cell edge between a cell inside and one outside: the region's boundary, cell by cell.
+            let mut edges = Vec::new();
+            for iy in 0..g.ny as isize {
+                for ix in 0..g.nx as isize {
+                    if !inside(ix, iy) {
+                        continue;
+                    }
+                    let (x, y) = g.position_m(g.index(ix as usize, iy as usize));
+                    let (l, r, b, t) = (x * cm - half, x * cm + half, y * cm - half, y * cm + half);
+                    for (dx, dy, a, z) in [
+                        (-1, 0, (l, b), (l, t)),
+                        (1, 0, (r, b), (r, t)),
+                        (0, -1, (l, b), (r, b)),
+                        (0, 1, (l, t), (r, t)),
+                    ] {
+                        if !inside(ix + dx, iy + dy) {
+                            edges.push(PathElement::new(vec![a, z], BLACK.stroke_width(2)));
+                        }
+                    }
+                }
+            }
+            chart.draw_series(edges).map_err(|e| e.to_string())?;
+        }
         chart
             .draw_series(self.overlay.actuators_m.iter().map(|&(x, y)| TriangleMarker::new((x * cm, y * cm), 7, BLACK)))
             .map_err(|e| e.to_string())?;
@@ -170,7 +203,8 @@ fn check_len(figure: &'static str, grid: &GridSpec, values: &[Option<f64>]) -> R
 /// Focus snapshots (paper, Fig. 4A, B): the focused field on the grid at a few instants, side by side, each
 /// `(title, one value per grid point or None where unmeasured)`; a common diverging colour scale, normalised by the
 /// largest magnitude over all snapshots, on a continuous red-blue map with its bar; `title` above all of them;
-/// `overlay`'s actuators and supports drawn on each.
+/// `overlay`'s actuators and supports drawn on each, and the cells at or above half the peak outlined in black (the
+/// focus's half-maximum region, at the focus time).
 ///
 /// # Errors
 /// [`FigureError::InvalidData`] for no snapshot, a snapshot not one value per grid point, or no finite value;
@@ -205,6 +239,7 @@ pub fn focus_snapshots(
             values: values.iter().map(|v| v.map(|v| v / peak)).collect::<Vec<_>>().into(),
             colour: diverging,
             scale: (0.0, 1.0),
+            outline_at: Some(0.5),
         })
         .collect();
     let figure = Maps {
@@ -212,7 +247,7 @@ pub fn focus_snapshots(
         overlay,
         grid: *grid,
         panels,
-        bar: Some(("velocity / peak velocity over all instants".to_owned(), -1.0, 1.0)),
+        bar: Some(("velocity / peak velocity over all instants (black outline: at least 0.5)".to_owned(), -1.0, 1.0)),
     };
     let width = 420 * snapshots.len().min(6) as u32;
     save(&figure, dir, name, (width.max(600), 420))
@@ -239,7 +274,13 @@ pub fn pixel_area_map(
         return Err(FigureError::InvalidData { figure: "pixel-area map", reason: "no finite area".to_owned() });
     }
     let hi = if hi > lo { hi } else { lo + 1.0 };
-    let panels = vec![MapPanel { title: String::new(), values: area_cm2.into(), colour: viridis, scale: (lo, hi) }];
+    let panels = vec![MapPanel {
+        title: String::new(),
+        values: area_cm2.into(),
+        colour: viridis,
+        scale: (lo, hi),
+        outline_at: None,
+    }];
     let figure = Maps {
         title: title.to_owned(),
         overlay,
