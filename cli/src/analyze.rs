@@ -12,6 +12,7 @@ use metaplate_analysis::pixel::{PixelAreaMap, PixelAreaOptions, pixel_area_map};
 use metaplate_analysis::report::{PlateReport, ReportOptions, analyse};
 use metaplate_control::PropagationMatrices;
 use metaplate_core::grid::GridSpec;
+use metaplate_core::scene::Scene;
 use metaplate_figures as figures;
 use metaplate_store::Dataset;
 use serde_json::{Value, json};
@@ -66,12 +67,25 @@ pub fn analyse_dataset(data: &Path, figures: Option<&Path>) -> anyhow::Result<Va
     }
     let pixels = pixel_area_map(&g, &grid, &mask, &PixelAreaOptions::default());
     let mut out = to_json(&report, pixels.as_ref());
+    // The analytic A0 wavelength of the scene's (host) plate, where the dataset's scene is a built-in one.
+    let scene_id = &dataset.manifest().meta.scene;
+    let scene = Scene::builtin(&scene_id.name).ok().filter(|s| s.id().hash == scene_id.hash);
+    if let (Some(scene), Some(rows)) = (&scene, out["wavelength"].as_array_mut()) {
+        for row in rows {
+            let a0 = row["freq_hz"].as_f64().and_then(|f| scene.plate.a0_wavelength_m(f).ok());
+            row["a0_wavelength_m"] = json!(a0);
+        }
+    }
     out["dataset"] = json!(data.display().to_string());
     out["scene"] = json!(dataset.manifest().meta.scene.name);
     out["points"] = json!(g.n_points());
     out["actuators"] = json!(g.n_actuators());
     if let Some(dir) = figures {
-        let written = write_figures(dir, &dataset.manifest().meta.scene.name, &g, &grid, &report, pixels.as_ref())?;
+        let overlay = scene.as_ref().map_or_else(figures::PlateOverlay::default, |s| figures::PlateOverlay {
+            actuators_m: s.actuators.iter().map(|a| (a.x_m, a.y_m)).collect(),
+            supports_m: s.supports.iter().map(|p| (p.x_m, p.y_m)).collect(),
+        });
+        let written = write_figures(dir, &scene_id.name, &g, &report, pixels.as_ref(), &out, &overlay)?;
         out["figures"] = json!(written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
     }
     Ok(out)
@@ -91,15 +105,19 @@ fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) 
         .wavelength
         .iter()
         .map(|w| match &w.summary {
-            Ok(s) => json!({"freq_hz": w.freq_hz, "median_m": s.median_m, "iqr_m": [s.iqr_m.0, s.iqr_m.1]}),
-            Err(e) => json!({"freq_hz": w.freq_hz, "median_m": null, "iqr_m": null, "error": e.to_string()}),
+            Ok(s) => json!({"freq_hz": w.freq_hz, "median_m": s.median_m, "iqr_m": [s.iqr_m.0, s.iqr_m.1],
+                "in_range": w.in_range, "actuators_flagged": s.flagged}),
+            Err(e) => json!({"freq_hz": w.freq_hz, "median_m": null, "iqr_m": null, "in_range": false,
+                "error": e.to_string()}),
         })
         .collect();
-    let (mut rank, mut kappa) = (serde_json::Map::new(), serde_json::Map::new());
+    let (mut rank, mut kappa, mut domain_points) =
+        (serde_json::Map::new(), serde_json::Map::new(), serde_json::Map::new());
     for (edge_m, a) in &report.authority {
         let key = edge_key(*edge_m);
         match a {
             Ok(a) => {
+                domain_points.insert(key.clone(), json!(a.points.len()));
                 rank.insert(key.clone(), json!(a.mean_effective_rank()));
                 kappa.insert(key, json!(a.mean_condition_number()));
             }
@@ -114,7 +132,23 @@ fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) 
     let refresh = report.refresh.as_ref().map_err(|e| keep("refresh".into(), e)).ok();
     let response = report.driven_response.as_ref().map_err(|e| keep("driven_response".into(), e)).ok();
     let pixels = pixels.map_err(|e| keep("pixel_area".into(), e)).ok();
+    let (lattice, range) = (&report.lattice, &report.resolvable);
     json!({
+        "lattice": {
+            "nx": lattice.grid.nx,
+            "ny": lattice.grid.ny,
+            "spacing_m": range.spacing_m,
+            "stride": lattice.stride,
+            "fill": range.fill,
+        },
+        "wavelength_resolvable": {
+            "nyquist_k_rad_m": range.nyquist_k_rad_m,
+            "shortest_m": range.shortest_wavelength_m,
+            "aperture_m": range.aperture_m,
+            "longest_m": range.longest_wavelength_m,
+            "note": "k-space estimates outside [shortest_m, longest_m], or on a lattice filled below 50 %, have \
+                     in_range false: the lattice aliases shorter waves, the aperture biases longer ones short",
+        },
         "wavelength": wavelength,
         "median_pixel_area_cm2": pixels.and_then(PixelAreaMap::median_area_cm2),
         "pixel_area_flagged_fraction": pixels.map(PixelAreaMap::flagged_fraction),
@@ -122,6 +156,7 @@ fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) 
         "pod_energy": pod.map(|p| p.energy.iter().take(64).collect::<Vec<_>>()),
         "effective_rank": rank,
         "condition_number": kappa,
+        "points_per_domain": domain_points,
         "refresh_ms": refresh.map(|r| r.refresh_s * 1e3),
         "driven_response": response.map(|r| r.freqs_hz.iter().zip(&r.mean_magnitude)
             .map(|(f, m)| json!({"freq_hz": f, "mean_abs": m})).collect::<Vec<_>>()),
@@ -132,18 +167,33 @@ fn to_json(report: &PlateReport, pixels: Result<&PixelAreaMap, &AnalysisError>) 
 fn print_table(out: &Value) {
     let show = |v: &Value| v.as_f64().map_or_else(|| "-".to_owned(), |x| format!("{x:.2}"));
     println!("dataset {} ({}, {} points)", out["dataset"], out["scene"], out["points"]);
+    let lattice = &out["lattice"];
+    let range = &out["wavelength_resolvable"];
+    let cm = |v: &Value| v.as_f64().map_or_else(|| "-".to_owned(), |x| format!("{:.1}", x * 100.0));
+    println!(
+        "lattice {} x {} at {} cm (every {} grid point(s), {:.0} % filled): wavelengths {} to {} cm resolvable",
+        lattice["nx"],
+        lattice["ny"],
+        cm(&lattice["spacing_m"]),
+        lattice["stride"],
+        lattice["fill"].as_f64().unwrap_or(f64::NAN) * 100.0,
+        cm(&range["shortest_m"]),
+        cm(&range["longest_m"]),
+    );
     println!("median pixel area (cm^2)   {}", show(&out["median_pixel_area_cm2"]));
     println!("POD components (99 %)      {}", out["pod_components_99"]);
     for key in ["9.5", "6.5", "3.5"] {
         println!(
-            "d = {key} cm: effective rank {}, condition number {}",
+            "d = {key} cm ({} points): effective rank {}, condition number {}",
+            out["points_per_domain"][key],
             show(&out["effective_rank"][key]),
             show(&out["condition_number"][key])
         );
     }
     println!("refresh (ms)               {}", show(&out["refresh_ms"]));
     for w in out["wavelength"].as_array().into_iter().flatten() {
-        println!("wavelength at {:>5} Hz: {} m", w["freq_hz"], show(&w["median_m"]));
+        let outside = if w["in_range"] == true { "" } else { "  (outside the resolvable range)" };
+        println!("wavelength at {:>5} Hz: {} cm{outside}", w["freq_hz"], cm(&w["median_m"]));
     }
     if let Some(errors) = out["errors"].as_object() {
         for (k, e) in errors {
@@ -152,49 +202,206 @@ fn print_table(out: &Value) {
     }
 }
 
-/// Writes every figure of one plate; returns the files written.
+/// The paper's measured wavelengths (Fig. 4A, metamaterial): 11.3 cm at 75 Hz and 2.5 cm at 600 Hz, (Hz, m).
+const PAPER_WAVELENGTHS: [(f64, f64); 2] = [(75.0, 0.113), (600.0, 0.025)];
+
+/// The paper's mean condition numbers (Fig. 6C) against domain edge, (cm, kappa): metamaterial, homogeneous.
+const PAPER_CONDITION_NUMBERS: [[(f64, f64); 3]; 2] =
+    [[(9.5, 5.0), (6.5, 10.1), (3.5, 35.9)], [(9.5, 51.5), (6.5, 110.6), (3.5, 236.0)]];
+
+/// "25 x 13 lattice at 1 cm" from an analysis's JSON.
+fn lattice_text(analysis: &Value) -> String {
+    let l = &analysis["lattice"];
+    format!("{} x {} lattice at {:.1} cm", l["nx"], l["ny"], l["spacing_m"].as_f64().unwrap_or(f64::NAN) * 100.0)
+}
+
+/// One plate's wavelengths from its analysis's JSON, as the figure takes them (frequencies without an estimate
+/// left out).
+fn wavelength_series(label: &str, analysis: &Value) -> figures::WavelengthSeries {
+    let rows: Vec<&Value> =
+        analysis["wavelength"].as_array().into_iter().flatten().filter(|w| w["median_m"].is_f64()).collect();
+    let num = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    figures::WavelengthSeries {
+        label: label.to_owned(),
+        freqs_hz: rows.iter().map(|w| num(&w["freq_hz"])).collect(),
+        median_m: rows.iter().map(|w| num(&w["median_m"])).collect(),
+        iqr_m: rows.iter().map(|w| (num(&w["iqr_m"][0]), num(&w["iqr_m"][1]))).collect(),
+        in_range: rows.iter().map(|w| w["in_range"] == true).collect(),
+    }
+}
+
+/// The references of a wavelength figure: the analytic A0 (from the first analysis that has it), the paper's
+/// measured end points, the resolvable range of the first analysis's lattice.
+fn wavelength_references(analyses: &[&Value], with_paper: bool) -> figures::WavelengthReferences {
+    let a0: Vec<(f64, f64)> = analyses
+        .iter()
+        .map(|a| {
+            a["wavelength"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|w| Some((w["freq_hz"].as_f64()?, w["a0_wavelength_m"].as_f64()?)))
+                .collect::<Vec<_>>()
+        })
+        .find(|points| !points.is_empty())
+        .unwrap_or_default();
+    let range = &analyses.first().map_or(&Value::Null, |a| &a["wavelength_resolvable"]);
+    figures::WavelengthReferences {
+        curves: if a0.is_empty() {
+            Vec::new()
+        } else {
+            vec![figures::Curve { label: "A0, homogeneous plate (analytic)".to_owned(), points: a0 }]
+        },
+        marks: if with_paper {
+            vec![figures::Curve {
+                label: "paper, metamaterial (measured)".to_owned(),
+                points: PAPER_WAVELENGTHS.to_vec(),
+            }]
+        } else {
+            Vec::new()
+        },
+        resolvable_m: range["shortest_m"].as_f64().zip(range["longest_m"].as_f64()),
+    }
+}
+
+/// Title of a wavelength figure.
+fn wavelength_title(analysis: &Value) -> String {
+    format!(
+        "Wavelength (k-space, median and IQR), {}; hollow: outside {:.0} to {:.1} cm",
+        lattice_text(analysis),
+        analysis["wavelength_resolvable"]["shortest_m"].as_f64().unwrap_or(f64::NAN) * 100.0,
+        analysis["wavelength_resolvable"]["longest_m"].as_f64().unwrap_or(f64::NAN) * 100.0,
+    )
+}
+
+/// Figures comparing plates on shared axes, from their analyses (`(label, analyze's JSON)`, metamaterial first):
+/// the wavelengths with the analytic A0 and the paper's measured points, and the condition numbers against domain
+/// edge with the paper's values. `metaplate demo` calls this after analysing both plates.
+///
+/// # Errors
+/// A figure that cannot be drawn or written.
+pub fn write_comparison_figures(dir: &Path, analyses: &[(&str, &Value)]) -> anyhow::Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
+    let Some((_, first)) = analyses.first() else { return Ok(written) };
+    let series: Vec<_> = analyses.iter().map(|(label, a)| wavelength_series(label, a)).collect();
+    let all: Vec<&Value> = analyses.iter().map(|(_, a)| *a).collect();
+    if series.iter().any(|s| !s.freqs_hz.is_empty()) {
+        let w = figures::wavelength(
+            dir,
+            "wavelength",
+            &wavelength_title(first),
+            &series,
+            &wavelength_references(&all, true),
+        )?;
+        written.extend([w.png, w.svg]);
+    }
+    if let Some(w) = condition_figure(dir, analyses)? {
+        written.extend([w.png, w.svg]);
+    }
+    Ok(written)
+}
+
+/// The condition numbers of `analyses` against domain edge, with the paper's values for the plates it measured
+/// (matched by label); `None` when no analysis has one.
+fn condition_figure(dir: &Path, analyses: &[(&str, &Value)]) -> anyhow::Result<Option<figures::Written>> {
+    let Some((_, first)) = analyses.first() else { return Ok(None) };
+    let curves: Vec<figures::Curve> = analyses
+        .iter()
+        .map(|(label, a)| figures::Curve {
+            label: format!("{label} ({})", domain_points_text(a)),
+            points: ["9.5", "6.5", "3.5"]
+                .iter()
+                .filter_map(|k| Some((k.parse::<f64>().ok()?, a["condition_number"][*k].as_f64()?)))
+                .collect(),
+        })
+        .collect();
+    if curves.iter().all(|c| c.points.is_empty()) {
+        return Ok(None);
+    }
+    // One set of marks per plate, in the plates' order, so that each takes its plate's colour.
+    let marks: Vec<figures::Curve> = analyses
+        .iter()
+        .map(|(label, _)| figures::Curve {
+            label: format!("paper, {label} (361 / 169 / 49 points at 0.5 cm)"),
+            points: match *label {
+                "metamaterial" => PAPER_CONDITION_NUMBERS[0].to_vec(),
+                "homogeneous" => PAPER_CONDITION_NUMBERS[1].to_vec(),
+                _ => Vec::new(),
+            },
+        })
+        .collect();
+    let title = format!("Mean condition number of G_D, 75 to 400 Hz, {}", lattice_text(first));
+    Ok(Some(figures::condition_numbers(dir, "condition_numbers", &title, &curves, &marks)?))
+}
+
+/// "81 / 49 / 9 points per domain" from an analysis's JSON.
+fn domain_points_text(analysis: &Value) -> String {
+    let n = |k: &str| analysis["points_per_domain"][k].as_u64().map_or_else(|| "-".to_owned(), |n| n.to_string());
+    format!("{} / {} / {} points", n("9.5"), n("6.5"), n("3.5"))
+}
+
+/// Writes every figure of one plate; returns the files written. Maps are drawn on the points' own lattice (a
+/// regular subset fills its cells; no holes between them).
 fn write_figures(
     dir: &Path,
     label: &str,
     g: &PropagationMatrices,
-    grid: &GridSpec,
     report: &PlateReport,
     pixels: Result<&PixelAreaMap, &AnalysisError>,
+    analysis: &Value,
+    overlay: &figures::PlateOverlay,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut written = Vec::new();
     let mut add = |w: figures::Written| written.extend([w.png, w.svg]);
-    let ok: Vec<_> = report.wavelength.iter().filter_map(|w| w.summary.as_ref().ok().map(|s| (w.freq_hz, s))).collect();
-    if !ok.is_empty() {
-        add(figures::wavelength(
-            dir,
-            "wavelength",
-            &[figures::WavelengthSeries {
-                label: label.to_owned(),
-                freqs_hz: ok.iter().map(|w| w.0).collect(),
-                median_m: ok.iter().map(|w| w.1.median_m).collect(),
-                iqr_m: ok.iter().map(|w| w.1.iqr_m).collect(),
-            }],
-        )?);
+    let lattice = &report.lattice;
+    let series = wavelength_series(label, analysis);
+    if !series.freqs_hz.is_empty() {
+        let references = wavelength_references(&[analysis], label == "metamaterial");
+        add(figures::wavelength(dir, "wavelength", &wavelength_title(analysis), &[series], &references)?);
     }
-    if let Some(row) = centre_row(g, grid) {
-        let opts = ReportOptions::default().refresh;
+    let opts = ReportOptions::default().refresh;
+    if let Some(row) = centre_row(g, &lattice.grid, &lattice.indices) {
         let mut snaps = Vec::new();
         for tau in SNAPSHOT_TAUS_S {
             let field = focus_snapshot(g, row, &opts.band, opts.method, tau)?;
-            snaps.push((format!("t = {:+.0} ms", tau * 1e3), on_grid(grid, g.points(), &field)));
+            snaps.push((format!("t = {:+.0} ms", tau * 1e3), on_grid(&lattice.grid, &lattice.indices, &field)));
         }
-        add(figures::focus_snapshots(dir, "focus_snapshots", grid, &snaps)?);
+        let (x, y) = lattice.grid.position_m(lattice.indices[row] as usize);
+        let title = format!(
+            "{label}: focus at ({:.1}, {:.1}) cm, {:.0} to {:.0} Hz, {}{}",
+            x * 100.0,
+            y * 100.0,
+            opts.band.lo_hz,
+            opts.band.hi_hz,
+            lattice_text(analysis),
+            overlay_key(overlay)
+        );
+        add(figures::focus_snapshots(dir, "focus_snapshots", &lattice.grid, &snaps, &title, overlay)?);
     }
     if let Ok(p) = pixels
         && let Some(median) = p.median_area_cm2()
     {
         let values: Vec<f64> = p.area_cm2.iter().map(|a| a.unwrap_or(f64::NAN)).collect();
-        let title = format!("{label}: virtual-pixel area, median {median:.2} cm^2");
-        add(figures::pixel_area_map(dir, "pixel_area", grid, &on_grid(grid, &p.points, &values), &title)?);
+        let title = format!(
+            "{label}: virtual-pixel area, median {median:.2} cm² ({} of {} points closed), 75 to 400 Hz, {}{}",
+            p.area_cm2.iter().flatten().count(),
+            p.area_cm2.len(),
+            lattice_text(analysis),
+            overlay_key(overlay)
+        );
+        add(figures::pixel_area_map(
+            dir,
+            "pixel_area",
+            &lattice.grid,
+            &on_grid(&lattice.grid, &lattice.indices, &values),
+            &title,
+            overlay,
+        )?);
     }
     if let Ok(pod) = &report.pod {
         let points = pod.energy.iter().take(64).enumerate().map(|(i, &e)| ((i + 1) as f64, e)).collect();
-        add(figures::pod_energy(dir, "pod_energy", &[figures::Curve { label: label.to_owned(), points }])?);
+        let label = format!("{label}: {} components for 99 %, {}", pod.components, lattice_text(analysis));
+        add(figures::pod_energy(dir, "pod_energy", &[figures::Curve { label, points }])?);
     }
     let domains: Vec<&DomainAuthority> = report.authority.iter().filter_map(|(_, a)| a.as_ref().ok()).collect();
     if !domains.is_empty() {
@@ -203,19 +410,16 @@ fn write_figures(
             .map(|a| {
                 let (mean_db, std_db) = a.relative_energy_db_stats().into_iter().unzip();
                 figures::SingularValueSeries {
-                    label: format!("{label}, d = {} cm", edge_key(a.edge_m)),
+                    label: format!("{label}, d = {} cm ({} points)", edge_key(a.edge_m), a.points.len()),
                     mean_db,
                     std_db,
                 }
             })
             .collect();
         add(figures::singular_value_energy(dir, "singular_value_energy", &series)?);
-        let points = domains.iter().map(|a| (a.edge_m * 100.0, a.mean_condition_number())).collect();
-        add(figures::condition_numbers(
-            dir,
-            "condition_numbers",
-            &[figures::Curve { label: label.to_owned(), points }],
-        )?);
+    }
+    if let Some(w) = condition_figure(dir, &[(label, analysis)])? {
+        add(w);
     }
     if let Ok(r) = &report.driven_response {
         let points = r.freqs_hz.iter().copied().zip(r.mean_magnitude.iter().copied()).collect();
@@ -224,13 +428,18 @@ fn write_figures(
     Ok(written)
 }
 
-/// Row of `g` nearest the grid's frame origin (the plate centre).
-fn centre_row(g: &PropagationMatrices, grid: &GridSpec) -> Option<usize> {
+/// The key to the overlay's marks, for a map's title ("" without marks).
+fn overlay_key(overlay: &figures::PlateOverlay) -> &'static str {
+    if overlay.actuators_m.is_empty() && overlay.supports_m.is_empty() { "" } else { "; ▲ actuators, ■ supports" }
+}
+
+/// Row of `g` nearest the frame origin (the plate centre); `indices[row]` is that row's index on `grid`.
+fn centre_row(g: &PropagationMatrices, grid: &GridSpec, indices: &[u32]) -> Option<usize> {
     let dist = |p: u32| {
         let (x, y) = grid.position_m(p as usize);
         x * x + y * y
     };
-    (0..g.n_points()).min_by(|&a, &b| dist(g.points()[a]).total_cmp(&dist(g.points()[b])))
+    (0..g.n_points().min(indices.len())).min_by(|&a, &b| dist(indices[a]).total_cmp(&dist(indices[b])))
 }
 
 /// Per-point values laid on the grid, `None` where unmeasured or not finite.

@@ -64,7 +64,7 @@ pub struct DemoArgs {
 const DISPERSION_FREQS_HZ: [f64; 6] = [75.0, 150.0, 250.0, 400.0, 500.0, 600.0];
 
 /// The default scan grid: every other point of the paper's 49 x 25 (1 cm spacing: 4 points per wavelength at
-/// 600 Hz, 3.5 x 3.5 cm authority domains hold 16 points).
+/// 600 Hz; the 3.5 x 3.5 cm authority domain, centred on the lattice point at the plate centre, holds 3 x 3 points).
 const DEFAULT_GRID: (usize, usize) = (25, 13);
 
 /// The pattern: positions as fractions of the measured area (-1..1 each way) and targets (`metaplate focus`
@@ -95,7 +95,11 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         let plate = run_plate(&scene, &dir, subset, &protocol, args)?;
         plates.insert(name.into(), plate);
     }
+    // Both plates on shared axes (wavelength with A0 and the paper's points; condition numbers with the paper's).
+    let analyses = ["metamaterial", "homogeneous"].map(|name| (name, &plates[name]["analysis"]));
+    let comparison = analyze::write_comparison_figures(&args.out.join("figures"), &analyses)?;
     let summary = json!({
+        "comparison_figures": comparison.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
         "plates": plates,
         "scan_grid": subset.map_or_else(|| json!("full"), |(nx, ny)| json!([nx, ny])),
         "protocol": protocol.name,
@@ -357,8 +361,8 @@ fn print_table(summary: &Value) {
     let keyed = |key: &str, edge: &str, digits: usize| {
         format!("{} / {}", num(&a("metamaterial")[key][edge], digits), num(&a("homogeneous")[key][edge], digits))
     };
-    let row = |q: &str, paper: &str, suite: String| println!("{q:<46} {paper:>26}   {suite}");
-    println!("\n{:<46} {:>26}   metaplate (metamaterial / homogeneous)", "quantity", "paper");
+    let row = |q: &str, paper: &str, suite: String| println!("{q:<46} {paper:>30}   {suite}");
+    println!("\n{:<46} {:>30}   metaplate (metamaterial / homogeneous)", "quantity", "paper");
     row(
         "wavelength at 75 Hz, metamaterial (model)",
         "11.3 cm",
@@ -378,9 +382,19 @@ fn print_table(summary: &Value) {
     row("median virtual-pixel area, cm^2", "2.74 / about 10 x", format!("{}{ratio}", pair("median_pixel_area_cm2", 2)));
     row("refresh, ms", "5 / -", pair("refresh_ms", 1));
     row("POD components for 99 %", "23 / 11", pair("pod_components_99", 0));
-    row("effective rank of G_D, d = 3.5 cm", "7.4 / 4.3", keyed("effective_rank", "3.5", 1));
-    for (edge, paper) in [("9.5", "5.0 / 51.5"), ("6.5", "10.1 / 110.6"), ("3.5", "35.9 / 236.0")] {
-        row(&format!("mean condition number, d = {edge} cm"), paper, keyed("condition_number", edge, 1));
+    // Authority depends on the lattice (how many points a domain holds): each side says its own, so that unlike
+    // is not read as like. The paper's domains hold 361, 169 and 49 points of its 5 mm grid.
+    let lattice = |key: &str, edge: &str| {
+        let spacing_cm = a("metamaterial")["lattice"]["spacing_m"].as_f64().map_or(f64::NAN, |h| h * 100.0);
+        format!("{} [{} pts, {spacing_cm:.1} cm]", keyed(key, edge, 1), a("metamaterial")["points_per_domain"][edge])
+    };
+    row("effective rank of G_D, d = 3.5 cm", "7.4 / 4.3 [49 pts, 0.5 cm]", lattice("effective_rank", "3.5"));
+    for (edge, paper) in [
+        ("9.5", "5.0 / 51.5 [361 pts, 0.5 cm]"),
+        ("6.5", "10.1 / 110.6 [169 pts, 0.5 cm]"),
+        ("3.5", "35.9 / 236.0 [49 pts, 0.5 cm]"),
+    ] {
+        row(&format!("mean condition number, d = {edge} cm"), paper, lattice("condition_number", edge));
     }
     let peak_mm_s = |p: &str| {
         plates[p]["pattern"]["pixels"]

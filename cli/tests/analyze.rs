@@ -55,6 +55,20 @@ fn analyze_prints_the_paper_quantities_and_writes_figures() {
         assert!(lo <= m && m <= hi && (0.01..0.25).contains(&m), "{w}");
     }
     assert!(wl[21]["median_m"].as_f64().unwrap() < wl[0]["median_m"].as_f64().unwrap());
+    // The lattice the points lie on and what it resolves: every estimate says whether it lies inside.
+    let spacing_m = v["lattice"]["spacing_m"].as_f64().unwrap();
+    let range = &v["wavelength_resolvable"];
+    assert!((range["shortest_m"].as_f64().unwrap() - 2.0 * spacing_m).abs() < 1e-12, "{range}");
+    assert!((range["nyquist_k_rad_m"].as_f64().unwrap() * spacing_m - std::f64::consts::PI).abs() < 1e-9);
+    assert!(wl.iter().all(|w| w["in_range"].is_boolean()));
+    // 13 x 7 spread over 49 x 25 is no regular subset (steps of 3 and 4 points): its lattice is the full grid's,
+    // mostly holes, so no estimate may claim to be in range.
+    if v["lattice"]["fill"].as_f64().unwrap() < 0.5 {
+        assert!(wl.iter().all(|w| w["in_range"] == false), "{wl:?}");
+    }
+    // The analytic A0 of the scene's plate beside each estimate (a built-in scene).
+    assert!(wl.iter().all(|w| w["a0_wavelength_m"].as_f64().is_some_and(|a| a > 0.05)));
+    assert!(v["points_per_domain"]["9.5"].as_u64().unwrap() >= 8);
 
     // POD: at least one component, and no more than the points or twice the band's bins.
     let pod = v["pod_components_99"].as_u64().unwrap();
@@ -76,6 +90,9 @@ fn analyze_prints_the_paper_quantities_and_writes_figures() {
     assert!(resp.len() > 100 && resp.iter().all(|r| r["mean_abs"].as_f64().unwrap() > 0.0));
 
     for name in ["wavelength", "focus_snapshots", "pod_energy", "singular_value_energy", "condition_numbers"] {
+        // Every figure carries its lattice in its title.
+        let svg = std::fs::read_to_string(figs.join(format!("{name}.svg"))).unwrap();
+        assert!(name == "pod_energy" || name == "singular_value_energy" || svg.contains("lattice at"), "{name}");
         for ext in ["png", "svg"] {
             let path = figs.join(format!("{name}.{ext}"));
             assert!(std::fs::metadata(&path).map(|m| m.len() > 1000).unwrap_or(false), "{}", path.display());

@@ -67,5 +67,11 @@ fn the_demo_calibrates_scans_analyses_and_renders_both_plates() {
             }
         }
     }
+    // Both plates on shared axes.
+    assert_eq!(summary["comparison_figures"].as_array().map(Vec::len), Some(4), "{}", summary["comparison_figures"]);
+    for figure in ["wavelength", "condition_numbers"] {
+        let svg = std::fs::read_to_string(out.join("figures").join(format!("{figure}.svg"))).unwrap();
+        assert!(svg.contains("metamaterial") && svg.contains("homogeneous") && svg.contains("paper"), "{figure}");
+    }
     std::fs::remove_dir_all(&out).unwrap();
 }

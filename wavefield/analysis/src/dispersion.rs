@@ -9,6 +9,7 @@ use metaplate_core::scene::Scene;
 use num_complex::Complex64;
 
 use crate::error::AnalysisError;
+use crate::lattice::Lattice;
 use crate::wavelength::stats::weighted_quantiles;
 use crate::wavelength::{
     AcrossActuators, Exclusion, KSpaceOptions, LocalEstimate, LocalOptions, WavelengthEstimate, WavelengthSummary,
@@ -210,11 +211,32 @@ pub fn wavelengths_at(
             b: grid.len(),
         });
     }
+    // The k-space estimate on the points' own lattice (a regular subset's holes would put spectral images of the
+    // field at high wavenumbers; see `crate::lattice`); the grid itself for a full scan.
+    let as_u32: Vec<u32> = layout.points.iter().map(|&p| p as u32).collect();
+    // No points: the full-grid path, which reports too few points.
+    let lattice = Lattice::of_points(grid, &as_u32).unwrap_or(Lattice { grid: *grid, indices: as_u32, stride: 1 });
+    let on = &lattice.grid;
+    let lattice_points: Vec<usize> = lattice.indices.iter().map(|&i| i as usize).collect();
+    let mut lattice_mask = vec![false; if lattice.stride == 1 { 0 } else { on.len() }];
+    if lattice.stride > 1 {
+        for (&p, &i) in layout.points.iter().zip(&lattice_points) {
+            lattice_mask[i] = layout.mask.get(p).copied().unwrap_or(false);
+        }
+    }
     let mut k_space = Vec::with_capacity(actuators);
     let mut local = Vec::with_capacity(actuators);
     for a in 0..actuators {
         let field = actuator_field(response, actuators, a, layout.points, grid.len())?;
-        k_space.push(estimate_wavelength(&field, layout.mask, grid.nx, grid.ny, grid.spacing_m, &opts.k_space)?);
+        let k_field = if lattice.stride == 1 {
+            None
+        } else {
+            Some(actuator_field(response, actuators, a, &lattice_points, on.len())?)
+        };
+        k_space.push(match &k_field {
+            None => estimate_wavelength(&field, layout.mask, grid.nx, grid.ny, grid.spacing_m, &opts.k_space)?,
+            Some(f) => estimate_wavelength(f, &lattice_mask, on.nx, on.ny, on.spacing_m, &opts.k_space)?,
+        });
         local.push(estimate_local_wavelength(&field, layout.local_mask, grid, layout.exclusions, &opts.local));
     }
     let k_space_summary = summarise(&k_space, opts.across)?;

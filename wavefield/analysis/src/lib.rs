@@ -8,7 +8,9 @@
 //! [`pod`]: spatial response dimensionality (POD of the actuator-summed response). [`authority`]: singular-value
 //! effective rank and condition number of `G_D(omega)` over square domains. [`refresh`]: the shortest resolvable
 //! spacing of two focused pulses, with the closed-form single-pixel focusing of [`focus`]. [`response`]: the mean
-//! driven response. [`report`]: all of them on one plate. [`bands`]: the operating band.
+//! driven response. [`report`]: all of them on one plate. [`bands`]: the operating band. [`lattice`]: the regular
+//! lattice a (subset of) measured points lies on, on which every lattice-dependent analysis works, and the range of
+//! wavelengths it can resolve.
 //!
 //! Every public routine checks its input: an empty or mismatched input, a NaN or infinity, or a parameter outside the
 //! routine's stated valid range is an [`AnalysisError`], never a panic and never a NaN in the result.
@@ -18,6 +20,7 @@ pub mod bands;
 pub mod dispersion;
 pub mod error;
 pub mod focus;
+pub mod lattice;
 mod linalg;
 pub mod pixel;
 pub mod pod;

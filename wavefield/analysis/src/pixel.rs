@@ -25,6 +25,7 @@ use metaplate_core::grid::GridSpec;
 
 use crate::bands::OPERATING_BAND_HZ;
 use crate::error::AnalysisError;
+use crate::lattice::Lattice;
 
 /// How the pixel-area map is computed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -145,17 +146,15 @@ pub fn pixel_area_map(
     if options.threads == 0 {
         return Err(AnalysisError::InvalidParameter { name: "threads", reason: "must be at least 1".into() });
     }
-    if let Some((coarse, coarse_points)) = sublattice(grid, g.points()) {
+    if let Some(lattice) = Lattice::of_points(grid, g.points())
+        && lattice.stride > 1
+    {
         // A regular subset (every s-th point, as `scan --grid` takes): the unmeasured points between would
         // read as off the plate and flag every contour, so the map is computed on the subset's own, coarser grid.
-        let mut coarse_mask = vec![false; coarse.len()];
-        for &c in &coarse_points {
-            coarse_mask[c as usize] = true;
-        }
         let relabelled = g
-            .with_points(coarse_points)
+            .with_points(lattice.indices.clone())
             .map_err(|e| AnalysisError::InvalidParameter { name: "points", reason: e.to_string() })?;
-        let mut map = pixel_area_map(&relabelled, &coarse, &coarse_mask, options)?;
+        let mut map = pixel_area_map(&relabelled, &lattice.grid, &lattice.mask(), options)?;
         map.points = g.points().to_vec();
         return Ok(map);
     }
@@ -214,31 +213,6 @@ pub fn pixel_area_map(
         map.peak.push(peak);
     }
     Ok(map)
-}
-
-/// The coarsest regular lattice through `points` (flat indices of `grid`, all inside it) when it is coarser than
-/// `grid`: stride `s >= 2`, the greatest common divisor of every point's offset from the lowest `ix` and `iy`
-/// present. Returns that lattice as a grid (spacing `s` times `grid`'s, origin at the lowest corner) and the
-/// points' indices on it; `None` when the points already use the full resolution (or there are fewer than two).
-fn sublattice(grid: &GridSpec, points: &[u32]) -> Option<(GridSpec, Vec<u32>)> {
-    let cells: Vec<(usize, usize)> = points.iter().map(|&p| grid.indices(p as usize)).collect();
-    let ix0 = cells.iter().map(|c| c.0).min()?;
-    let iy0 = cells.iter().map(|c| c.1).min()?;
-    let stride = cells.iter().fold(0, |g, &(ix, iy)| gcd(gcd(g, ix - ix0), iy - iy0));
-    if stride < 2 {
-        return None;
-    }
-    let nx = cells.iter().map(|c| (c.0 - ix0) / stride).max()? + 1;
-    let ny = cells.iter().map(|c| (c.1 - iy0) / stride).max()? + 1;
-    let (origin_x_m, origin_y_m) = grid.position_m(grid.index(ix0, iy0));
-    let coarse = GridSpec { nx, ny, spacing_m: grid.spacing_m * stride as f64, origin_x_m, origin_y_m };
-    let indices = cells.iter().map(|&(ix, iy)| coarse.index((ix - ix0) / stride, (iy - iy0) / stride) as u32).collect();
-    Some((coarse, indices))
-}
-
-/// Greatest common divisor (`gcd(0, n) = n`).
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 /// The half-maximum region of one field.
@@ -418,27 +392,6 @@ fn cell_polygon_area(f: &[f64; 4], inside: &[bool; 4], level: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_regular_subset_is_mapped_on_its_own_coarser_grid() {
-        // 49 x 25 grid at 1 cm; every other point from (2, 1): a 24 x 12 lattice at 2 cm with its origin at (2, 1).
-        let grid = GridSpec::centred(49, 25, 0.01);
-        let points: Vec<u32> =
-            (1..25).step_by(2).flat_map(|iy| (2..49).step_by(2).map(move |ix| grid.index(ix, iy) as u32)).collect();
-        let (coarse, mapped) = sublattice(&grid, &points).unwrap();
-        assert_eq!((coarse.nx, coarse.ny), (24, 12));
-        assert!((coarse.spacing_m - 0.02).abs() < 1e-15);
-        for (&p, &c) in points.iter().zip(&mapped) {
-            let (a, b) = (grid.position_m(p as usize), coarse.position_m(c as usize));
-            assert!((a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12, "point {p} moved");
-        }
-        // Strides 1 (a neighbour pair) and a single point: nothing coarser to use.
-        assert!(sublattice(&grid, &[0, 1]).is_none());
-        assert!(sublattice(&grid, &[7]).is_none());
-        // Stride 3 along x only, 6 along y: the common stride is 3.
-        let mixed = [grid.index(0, 0), grid.index(3, 0), grid.index(0, 6)].map(|i| i as u32);
-        assert!((sublattice(&grid, &mixed).unwrap().0.spacing_m - 0.03).abs() < 1e-15);
-    }
 
     #[test]
     fn holes_are_told_from_the_outside() {

@@ -9,6 +9,7 @@ use crate::authority::{AuthorityOptions, DomainAuthority, PAPER_DOMAIN_EDGES_M, 
 use crate::bands::OPERATING_BAND_HZ;
 use crate::dispersion::actuator_field;
 use crate::error::AnalysisError;
+use crate::lattice::{Lattice, ResolvableRange};
 use crate::pod::{Pod, PodOptions, pod};
 use crate::refresh::{Refresh, RefreshOptions, refresh};
 use crate::response::{DrivenResponse, driven_response};
@@ -52,12 +53,20 @@ pub struct WavelengthAt {
     pub freq_hz: f64,
     /// The paper's summary: per-actuator median and quartiles, averaged over actuators; or why none.
     pub summary: Result<WavelengthSummary, AnalysisError>,
+    /// Whether the summary can be trusted: its median lies in the lattice's [`ResolvableRange`] (which asks for
+    /// a lattice filled well enough) and no actuator's estimate carried a range flag. `false` when there is none.
+    pub in_range: bool,
 }
 
 /// Everything [`analyse`] measured. An analysis that could not run on this dataset (too few points in a domain, no
 /// pixel resolving two pulses in the search) holds its error, so the others are still reported.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlateReport {
+    /// The lattice the measured points lie on (every s-th point of the grid for a regular subset): the
+    /// wavelength, the pixel area and the authority domains are all measured on it.
+    pub lattice: Lattice,
+    /// What a k-space estimate on that lattice can resolve.
+    pub resolvable: ResolvableRange,
     /// Wavelength against frequency.
     pub wavelength: Vec<WavelengthAt>,
     /// POD of the actuator-summed response.
@@ -74,28 +83,35 @@ pub struct PlateReport {
 /// refresh pulse's skirts (50 to 425 Hz by default) and the wavelength frequencies.
 ///
 /// # Errors
-/// [`AnalysisError::InvalidParameter`] when a point of `g` lies off `grid`. Each analysis's own errors are kept in
-/// the report.
+/// [`AnalysisError::InvalidParameter`] when a point of `g` lies off `grid`; [`AnalysisError::Empty`] when `g` has
+/// no points. Each analysis's own errors are kept in the report.
 pub fn analyse(g: &PropagationMatrices, grid: &GridSpec, opts: &ReportOptions) -> Result<PlateReport, AnalysisError> {
-    if let Some(&p) = g.points().iter().find(|&&p| p as usize >= grid.len()) {
-        return Err(AnalysisError::InvalidParameter {
-            name: "points",
-            reason: format!("grid index {p} is beyond the grid's {} points", grid.len()),
-        });
-    }
-    let wavelength = opts
-        .wavelength_freqs_hz
-        .iter()
-        .filter_map(|&f| nearest_bin(g, f))
-        .map(|k| WavelengthAt { freq_hz: g.freqs_hz()[k], summary: wavelength_at_bin(g, grid, k) })
-        .collect();
+    let lattice = lattice_of(g, grid)?;
+    let resolvable = lattice.resolvable();
+    let wavelength = opts.wavelength_freqs_hz.iter().filter_map(|&f| wavelength_at(g, grid, f, &resolvable)).collect();
     Ok(PlateReport {
+        lattice,
+        resolvable,
         wavelength,
         pod: pod(g, &opts.pod),
         authority: opts.domain_edges_m.iter().map(|&d| (d, domain_authority(g, grid, d, &opts.authority))).collect(),
         refresh: refresh(g, &opts.refresh),
         driven_response: driven_response(g, opts.response_band_hz),
     })
+}
+
+/// The k-space wavelength at `g`'s bin nearest `freq_hz`, judged against `resolvable` (the range of `g`'s lattice,
+/// [`lattice_of`]); `None` when `freq_hz` lies more than half a bin outside `g`'s bins.
+pub fn wavelength_at(
+    g: &PropagationMatrices,
+    grid: &GridSpec,
+    freq_hz: f64,
+    resolvable: &ResolvableRange,
+) -> Option<WavelengthAt> {
+    let k = nearest_bin(g, freq_hz)?;
+    let summary = wavelength_at_bin(g, grid, k);
+    let in_range = summary.as_ref().is_ok_and(|s| s.flagged == 0 && resolvable.contains(s.median_m));
+    Some(WavelengthAt { freq_hz: g.freqs_hz()[k], summary, in_range })
 }
 
 /// Position of `g`'s bin nearest `freq_hz`, or `None` when `freq_hz` lies more than half a bin outside them.
@@ -106,8 +122,27 @@ fn nearest_bin(g: &PropagationMatrices, freq_hz: f64) -> Option<usize> {
     ((f - freq_hz).abs() <= spacing_hz / 2.0).then_some(k)
 }
 
+/// The lattice of `g`'s points on `grid` ([`Lattice::of_points`]).
+///
+/// # Errors
+/// [`AnalysisError::InvalidParameter`] when a point lies off `grid`; [`AnalysisError::Empty`] for no points.
+pub fn lattice_of(g: &PropagationMatrices, grid: &GridSpec) -> Result<Lattice, AnalysisError> {
+    if let Some(&p) = g.points().iter().find(|&&p| p as usize >= grid.len()) {
+        return Err(AnalysisError::InvalidParameter {
+            name: "points",
+            reason: format!("grid index {p} is beyond the grid's {} points", grid.len()),
+        });
+    }
+    Lattice::of_points(grid, g.points()).ok_or(AnalysisError::Empty { input: "measured points" })
+}
+
 /// The paper's k-space wavelength at bin `k`: each actuator's field over the measured points, averaged over
-/// actuators ("the mean of these statistics across actuators").
+/// actuators ("the mean of these statistics across actuators"). The fields are laid on the points' own lattice
+/// ([`Lattice::of_points`]): on the full grid, a subset's unmeasured points between would put spectral images of
+/// the field at high wavenumbers, where the peak search finds them.
+///
+/// # Errors
+/// As [`lattice_of`], [`estimate_wavelength`] and [`summarise`].
 pub fn wavelength_at_bin(
     g: &PropagationMatrices,
     grid: &GridSpec,
@@ -119,15 +154,14 @@ pub fn wavelength_at_bin(
     })?;
     let (m, n) = (g.n_points(), g.n_actuators());
     let response: Vec<Complex64> = (0..m * n).map(|i| gk[(i / n, i % n)]).collect();
-    let points: Vec<usize> = g.points().iter().map(|&p| p as usize).collect();
-    let mut mask = vec![false; grid.len()];
-    for &p in &points {
-        mask[p] = true;
-    }
+    let lattice = lattice_of(g, grid)?;
+    let on = &lattice.grid;
+    let points: Vec<usize> = lattice.indices.iter().map(|&p| p as usize).collect();
+    let mask = lattice.mask();
     let estimates = (0..n)
         .map(|a| {
-            let field = actuator_field(&response, n, a, &points, grid.len())?;
-            estimate_wavelength(&field, &mask, grid.nx, grid.ny, grid.spacing_m, &KSpaceOptions::default())
+            let field = actuator_field(&response, n, a, &points, on.len())?;
+            estimate_wavelength(&field, &mask, on.nx, on.ny, on.spacing_m, &KSpaceOptions::default())
         })
         .collect::<Result<Vec<_>, _>>()?;
     summarise(&estimates, AcrossActuators::Mean)

@@ -117,3 +117,29 @@ fn scene_layout_of_the_lab_plate() {
     // A pad's circle holds its square: half-diagonal of 18 mm.
     assert!((layout.exclusions[scene.actuators.len()].radius_m - 0.018 / 2f64.sqrt()).abs() < 1e-12);
 }
+
+#[test]
+fn a_regular_subset_is_measured_on_its_own_lattice() {
+    // Every second point of the stadium (1 cm): on the full 5 mm grid the holes between would put images of a 6 cm
+    // wave at high wavenumbers; on the subset's lattice the estimate is that of the full grid within 5 %.
+    let (mask, g) = (stadium_mask(), grid());
+    let points: Vec<usize> =
+        measured_points().into_iter().filter(|&p| (p % NX).is_multiple_of(2) && (p / NX).is_multiple_of(2)).collect();
+    let fields: Vec<Vec<Complex64>> = [0.3, 1.1, 2.0].iter().map(|&angle| plane_wave(0.06, angle)).collect();
+    let layout = FieldLayout { grid: &g, points: &points, mask: &mask, local_mask: &mask, exclusions: &[] };
+    let w = wavelengths_at(&response(&fields, &points), fields.len(), &layout, &DispersionOptions::default()).unwrap();
+    let full = {
+        let all = measured_points();
+        let layout = FieldLayout { grid: &g, points: &all, mask: &mask, local_mask: &mask, exclusions: &[] };
+        wavelengths_at(&response(&fields, &all), fields.len(), &layout, &DispersionOptions::default()).unwrap()
+    };
+    let (sub, whole) = (w.k_space_summary.median_m, full.k_space_summary.median_m);
+    // What the subset read on the full grid, holes and all: an image, far from 6 cm.
+    let mut holes = vec![false; NX * NY];
+    for &p in &points {
+        holes[p] = true;
+    }
+    let on_full = estimate_wavelength(&fields[0], &holes, NX, NY, SPACING_M, &KSpaceOptions::default()).unwrap();
+    assert!((on_full.median_m / 0.06 - 1.0).abs() > 0.5, "{on_full:?}");
+    assert!((sub / whole - 1.0).abs() < 0.05 && (sub / 0.06 - 1.0).abs() < 0.05, "subset {sub} m, full grid {whole} m");
+}

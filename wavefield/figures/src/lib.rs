@@ -8,14 +8,15 @@
 //! `<name>.svg` into a directory, returning both paths.
 
 mod colour;
+mod glyphs;
 mod maps;
 mod plots;
 mod render;
 mod tradeoff;
 
-pub use maps::{focus_snapshots, pixel_area_map};
+pub use maps::{PlateOverlay, focus_snapshots, pixel_area_map};
 pub use plots::{
-    Curve, SingularValueSeries, WavelengthSeries, condition_numbers, driven_response, pod_energy,
+    Curve, SingularValueSeries, WavelengthReferences, WavelengthSeries, condition_numbers, driven_response, pod_energy,
     singular_value_energy, wavelength,
 };
 pub use render::{FigureError, Written};

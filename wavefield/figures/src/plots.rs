@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::colour::PALETTE;
-use crate::render::{FONT, Figure, FigureError, Written, axis_range, save};
+use crate::render::{FONT, Figure, FigureError, Written, axis_range, plain_number, save};
 
 /// One labelled series of points `(x, y)`.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,6 +28,20 @@ pub struct WavelengthSeries {
     pub median_m: Vec<f64>,
     /// Interquartile range, m, one per frequency.
     pub iqr_m: Vec<(f64, f64)>,
+    /// Per frequency: whether the estimate lies in the lattice's resolvable range (drawn filled) or not (drawn
+    /// hollow, without its range bar). Empty: all in range.
+    pub in_range: Vec<bool>,
+}
+
+/// What a wavelength figure shows besides the measured series.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct WavelengthReferences {
+    /// Model curves (for example the analytic A0 wavelength), wavelength in m against frequency in Hz: dashed.
+    pub curves: Vec<Curve>,
+    /// Reference points (for example the paper's measured wavelengths), m against Hz: large crosses.
+    pub marks: Vec<Curve>,
+    /// The lattice's resolvable range, (shortest, longest) wavelength in m: dotted horizontal lines.
+    pub resolvable_m: Option<(f64, f64)>,
 }
 
 /// Band-averaged relative singular-value energy of one plate over one domain.
@@ -51,6 +65,20 @@ struct Series {
     label: String,
     points: Vec<(f64, f64)>,
     bars: Vec<(f64, f64, f64)>,
+    look: Look,
+}
+
+/// How a series is drawn.
+#[derive(Clone, PartialEq)]
+enum Look {
+    /// A line through filled dots; the dots whose flag is `false` hollow (outside a valid range).
+    Measured(Vec<bool>),
+    /// A dashed line (a model).
+    Dashed,
+    /// Large crosses, no line (reference values).
+    Marks,
+    /// A dotted grey line (a limit).
+    Limit,
 }
 
 /// One chart: axes, title and series. With `log_y` the y values are plotted as their base-10 logarithm and labelled
@@ -108,11 +136,11 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
         .caption(&panel.title, (FONT, 20))
         .margin(12)
         .x_label_area_size(45)
-        .y_label_area_size(70)
+        .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| e.to_string())?;
     let log_y = panel.log_y;
-    let y_fmt = move |v: &f64| if log_y { format!("1e{v:.1}") } else { format!("{v:.3}") };
+    let y_fmt = move |v: &f64| if log_y { plain_number(10f64.powf(*v)) } else { plain_number(*v) };
     chart
         .configure_mesh()
         .x_desc(panel.x_desc)
@@ -120,19 +148,68 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
         .label_style((FONT, 14))
         .axis_desc_style((FONT, 15))
         .y_label_formatter(&y_fmt)
+        .x_label_formatter(&|v: &f64| plain_number(*v))
         .draw()
         .map_err(|e| e.to_string())?;
-    for (i, ((pts, bars), s)) in series.iter().zip(&panel.series).enumerate() {
-        let colour = PALETTE[i % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))
-            .map_err(|e| e.to_string())?
-            .label(s.label.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
-        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled()))).map_err(|e| e.to_string())?;
-        chart
-            .draw_series(bars.iter().map(|&(x, lo, hi)| PathElement::new(vec![(x, lo), (x, hi)], colour)))
-            .map_err(|e| e.to_string())?;
+    // Measured series take the palette in order; reference marks take it in order too, so that the k-th set of
+    // marks shares the k-th measured series' colour (a plate and the paper's values for it); models are black.
+    let (mut measured, mut marks) = (0, 0);
+    for ((pts, bars), s) in series.iter().zip(&panel.series) {
+        let next = |n: &mut usize| {
+            *n += 1;
+            PALETTE[(*n - 1) % PALETTE.len()]
+        };
+        let colour = match s.look {
+            Look::Limit => RGBColor(140, 140, 140),
+            Look::Dashed => BLACK,
+            Look::Marks => next(&mut marks),
+            Look::Measured(_) => next(&mut measured),
+        };
+        match &s.look {
+            Look::Measured(in_range) => {
+                chart
+                    .draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))
+                    .map_err(|e| e.to_string())?
+                    .label(s.label.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+                let filled = |i: usize| in_range.get(i).copied().unwrap_or(true);
+                chart
+                    .draw_series(pts.iter().enumerate().map(|(i, &p)| {
+                        let style = if filled(i) { colour.filled() } else { WHITE.filled() };
+                        Circle::new(p, 4, style)
+                    }))
+                    .map_err(|e| e.to_string())?;
+                chart
+                    .draw_series(
+                        pts.iter()
+                            .enumerate()
+                            .filter(|(i, _)| !filled(*i))
+                            .map(|(_, &p)| Circle::new(p, 4, colour.stroke_width(2))),
+                    )
+                    .map_err(|e| e.to_string())?;
+                chart
+                    .draw_series(bars.iter().map(|&(x, lo, hi)| PathElement::new(vec![(x, lo), (x, hi)], colour)))
+                    .map_err(|e| e.to_string())?;
+            }
+            Look::Dashed | Look::Limit => {
+                let (dash, gap, width) = if s.look == Look::Limit { (3, 4, 1) } else { (10, 6, 2) };
+                let drawn = chart
+                    .draw_series(DashedLineSeries::new(pts.iter().copied(), dash, gap, colour.stroke_width(width)))
+                    .map_err(|e| e.to_string())?;
+                if !s.label.is_empty() {
+                    drawn
+                        .label(s.label.clone())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 8, y)], colour.stroke_width(width)));
+                }
+            }
+            Look::Marks => {
+                chart
+                    .draw_series(pts.iter().map(|&p| Cross::new(p, 7, colour.stroke_width(3))))
+                    .map_err(|e| e.to_string())?
+                    .label(s.label.clone())
+                    .legend(move |(x, y)| Cross::new((x + 10, y), 5, colour.stroke_width(2)));
+            }
+        }
     }
     chart
         .configure_series_labels()
@@ -152,33 +229,70 @@ fn check_nonempty<T>(figure: &'static str, items: &[T]) -> Result<(), FigureErro
 }
 
 fn plain(label: &str, points: Vec<(f64, f64)>) -> Series {
-    Series { label: label.to_owned(), points, bars: Vec::new() }
+    Series { label: label.to_owned(), points, bars: Vec::new(), look: Look::Measured(Vec::new()) }
 }
 
-/// Wavelength (cm, median with the interquartile range as bars) against frequency (Hz), one curve per plate
-/// (paper, Fig. 2A). Writes `<dir>/<name>.png` and `.svg`.
+/// Wavelength (cm, median with the interquartile range as bars) against frequency (Hz), one curve per plate on
+/// shared axes (paper, Fig. 2A), with `references` (models dashed, reference values as crosses, the resolvable range
+/// dotted); estimates outside the resolvable range drawn hollow. `title` goes above (the lattice, for example).
+/// Writes `<dir>/<name>.png` and `.svg`.
 ///
 /// # Errors
 /// [`FigureError::InvalidData`] for no series, mismatched lengths, or nothing finite; [`FigureError::Draw`],
 /// [`FigureError::Io`] when drawing or writing fails.
-pub fn wavelength(dir: &Path, name: &str, series: &[WavelengthSeries]) -> Result<Written, FigureError> {
+pub fn wavelength(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    series: &[WavelengthSeries],
+    references: &WavelengthReferences,
+) -> Result<Written, FigureError> {
     check_nonempty("wavelength", series)?;
     let mut out = Vec::new();
     for s in series {
-        if s.median_m.len() != s.freqs_hz.len() || s.iqr_m.len() != s.freqs_hz.len() {
+        if s.median_m.len() != s.freqs_hz.len()
+            || s.iqr_m.len() != s.freqs_hz.len()
+            || !(s.in_range.is_empty() || s.in_range.len() == s.freqs_hz.len())
+        {
             return Err(FigureError::InvalidData {
                 figure: "wavelength",
-                reason: format!("{}: frequencies, medians and ranges differ in length", s.label),
+                reason: format!("{}: frequencies, medians, ranges and flags differ in length", s.label),
             });
         }
+        let in_range = |i: usize| s.in_range.get(i).copied().unwrap_or(true);
         out.push(Series {
             label: s.label.clone(),
             points: s.freqs_hz.iter().zip(&s.median_m).map(|(&f, &m)| (f, m * 100.0)).collect(),
-            bars: s.freqs_hz.iter().zip(&s.iqr_m).map(|(&f, &(lo, hi))| (f, lo * 100.0, hi * 100.0)).collect(),
+            bars: s
+                .freqs_hz
+                .iter()
+                .zip(&s.iqr_m)
+                .enumerate()
+                .filter(|(i, _)| in_range(*i))
+                .map(|(_, (&f, &(lo, hi)))| (f, lo * 100.0, hi * 100.0))
+                .collect(),
+            look: Look::Measured(s.in_range.clone()),
         });
     }
+    let to_cm = |c: &Curve| c.points.iter().map(|&(f, m)| (f, m * 100.0)).collect::<Vec<_>>();
+    for c in &references.curves {
+        out.push(Series { label: c.label.clone(), points: to_cm(c), bars: Vec::new(), look: Look::Dashed });
+    }
+    for c in &references.marks {
+        out.push(Series { label: c.label.clone(), points: to_cm(c), bars: Vec::new(), look: Look::Marks });
+    }
+    if let Some((short_m, long_m)) = references.resolvable_m {
+        let fs = series.iter().flat_map(|s| s.freqs_hz.iter().copied()).filter(|f| f.is_finite());
+        let (f0, f1) = fs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), f| (a.min(f), b.max(f)));
+        if f0.is_finite() {
+            for (label, m) in [("resolvable range", long_m), ("", short_m)] {
+                let points = vec![(f0, m * 100.0), (f1, m * 100.0)];
+                out.push(Series { label: label.to_owned(), points, bars: Vec::new(), look: Look::Limit });
+            }
+        }
+    }
     let panel = Panel {
-        title: "Wavelength (k-space, median and IQR)".to_owned(),
+        title: title.to_owned(),
         x_desc: "frequency (Hz)",
         y_desc: "wavelength (cm)",
         log_y: false,
@@ -245,6 +359,7 @@ pub fn singular_value_energy(dir: &Path, name: &str, series: &[SingularValueSeri
             label: s.label.clone(),
             points: s.mean_db.iter().enumerate().map(|(i, &m)| (x(i), m)).collect(),
             bars: s.mean_db.iter().zip(&s.std_db).enumerate().map(|(i, (&m, &d))| (x(i), m - d, m + d)).collect(),
+            look: Look::Measured(Vec::new()),
         });
     }
     let panel = Panel {
@@ -262,14 +377,27 @@ pub fn singular_value_energy(dir: &Path, name: &str, series: &[SingularValueSeri
 ///
 /// # Errors
 /// As [`wavelength`].
-pub fn condition_numbers(dir: &Path, name: &str, series: &[Curve]) -> Result<Written, FigureError> {
+pub fn condition_numbers(
+    dir: &Path,
+    name: &str,
+    title: &str,
+    series: &[Curve],
+    marks: &[Curve],
+) -> Result<Written, FigureError> {
     check_nonempty("condition numbers", series)?;
+    let mut all: Vec<Series> = series.iter().map(|c| plain(&c.label, c.points.clone())).collect();
+    all.extend(marks.iter().filter(|c| !c.points.is_empty()).map(|c| Series {
+        label: c.label.clone(),
+        points: c.points.clone(),
+        bars: Vec::new(),
+        look: Look::Marks,
+    }));
     let panel = Panel {
-        title: "Mean condition number of G_D".to_owned(),
+        title: title.to_owned(),
         x_desc: "domain edge (cm)",
         y_desc: "condition number",
         log_y: true,
-        series: series.iter().map(|c| plain(&c.label, c.points.clone())).collect(),
+        series: all,
     };
     save(&Stack { name: "condition numbers", panels: vec![panel] }, dir, name, (900, 600))
 }
@@ -289,4 +417,22 @@ pub fn driven_response(dir: &Path, name: &str, series: &[Curve]) -> Result<Writt
         series: series.iter().map(|c| plain(&c.label, c.points.clone())).collect(),
     };
     save(&Stack { name: "driven response", panels: vec![panel] }, dir, name, (900, 600))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::render::plain_number;
+
+    #[test]
+    fn log_axis_labels_are_plain_numbers() {
+        let labels: Vec<String> = [2.8f64, 3.0, 1.6, 0.0, -1.5].iter().map(|v| plain_number(10f64.powf(*v))).collect();
+        assert_eq!(labels, ["631", "1000", "39.8", "1", "0.0316"]);
+        assert_eq!(plain_number(10f64.powf(-2.5)), "3.2×10⁻³");
+        assert_eq!(plain_number(2.5), "2.5");
+        assert_eq!(plain_number(-0.5), "-0.5");
+        assert_eq!(plain_number(0.0), "0");
+        assert_eq!(plain_number(10f64.powf(-4.5)), "3.2×10⁻⁵");
+        assert_eq!(plain_number(1e-4), "10⁻⁴");
+        assert_eq!(plain_number(2.5e7), "2.5×10⁷");
+    }
 }

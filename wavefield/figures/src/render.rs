@@ -9,6 +9,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
+use crate::glyphs::Glyphs;
+
 /// The bundled font: DejaVu Sans (see `fonts/LICENSE-DejaVu.txt`).
 const FONT_TTF: &[u8] = include_bytes!("../fonts/DejaVuSans.ttf");
 
@@ -77,7 +79,8 @@ pub(crate) fn save<F: Figure>(figure: &F, dir: &Path, name: &str, size: (u32, u3
     let draw_error = |reason: String| FigureError::Draw { figure: F::NAME, reason };
     let mut pixels = vec![0u8; size.0 as usize * size.1 as usize * 3];
     {
-        let root = BitMapBackend::with_buffer(&mut pixels, size).into_drawing_area();
+        let font = ab_glyph::FontRef::try_from_slice(FONT_TTF).map_err(|_| FigureError::Font)?;
+        let root = Glyphs { inner: BitMapBackend::with_buffer(&mut pixels, size), font }.into_drawing_area();
         figure.draw(&root).map_err(draw_error)?;
         root.present().map_err(|e| draw_error(e.to_string()))?;
     }
@@ -116,4 +119,48 @@ pub(crate) fn axis_range(values: impl Iterator<Item = f64>, pad: f64) -> Option<
     }
     let span = if hi > lo { hi - lo } else { lo.abs().max(1.0) };
     Some((lo - pad * span, hi + pad * span))
+}
+
+/// A number as a reader writes it, with three significant digits at most: 631, 1000, 25.5, 0.316 (never `1e2.8`);
+/// below 0.01 or from a million up in powers of ten with superscripts, 3.2×10⁻⁵, 10⁶.
+pub(crate) fn plain_number(v: f64) -> String {
+    if !v.is_finite() {
+        return String::new();
+    }
+    let magnitude = v.abs();
+    if magnitude != 0.0 && !(1e-2..1e6).contains(&magnitude) {
+        let exponent = magnitude.log10().floor();
+        let mantissa = v / 10f64.powf(exponent);
+        let power = format!("10{}", superscript(exponent as i32));
+        let mantissa_text = format!("{mantissa:.1}");
+        return match mantissa_text.as_str() {
+            "1.0" => power,
+            "-1.0" => format!("-{power}"),
+            _ => format!("{}×{power}", mantissa_text.trim_end_matches(".0")),
+        };
+    }
+    let decimals = if magnitude >= 100.0 || magnitude == 0.0 { 0 } else { (2.0 - magnitude.log10().floor()) as usize };
+    let text = format!("{v:.decimals$}");
+    // Trailing zeros after the point say nothing: 2.50 -> 2.5, 3.0 -> 3.
+    if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.').to_owned() } else { text }
+}
+
+/// `n` in superscript digits (with a superscript minus).
+fn superscript(n: i32) -> String {
+    n.to_string()
+        .chars()
+        .map(|c| match c {
+            '-' => '⁻',
+            '0' => '⁰',
+            '1' => '¹',
+            '2' => '²',
+            '3' => '³',
+            '4' => '⁴',
+            '5' => '⁵',
+            '6' => '⁶',
+            '7' => '⁷',
+            '8' => '⁸',
+            _ => '⁹',
+        })
+        .collect()
 }

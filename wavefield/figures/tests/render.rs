@@ -7,8 +7,8 @@ use std::path::Path;
 
 use metaplate_core::grid::GridSpec;
 use metaplate_figures::{
-    Curve, FigureError, SingularValueSeries, WavelengthSeries, Written, condition_numbers, driven_response,
-    focus_snapshots, pixel_area_map, pod_energy, singular_value_energy, wavelength,
+    Curve, FigureError, PlateOverlay, SingularValueSeries, WavelengthReferences, WavelengthSeries, Written,
+    condition_numbers, driven_response, focus_snapshots, pixel_area_map, pod_energy, singular_value_energy, wavelength,
 };
 
 const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n";
@@ -45,9 +45,26 @@ fn line_figures_render_to_png_and_svg() {
         label: "metamaterial".into(),
         median_m: freqs.iter().map(|f| 0.1 * (75.0 / f).sqrt()).collect(),
         iqr_m: freqs.iter().map(|f| (0.09 * (75.0 / f).sqrt(), 0.11 * (75.0 / f).sqrt())).collect(),
+        in_range: freqs.iter().map(|&f| f > 100.0).collect(),
         freqs_hz: freqs.clone(),
     };
-    check(&wavelength(d, "wavelength", &[wl]).unwrap(), &["frequency (Hz)", "wavelength (cm)", "metamaterial"]);
+    let references = WavelengthReferences {
+        curves: vec![curve("A0 (analytic)", |f| 0.2 * (75.0 / f).sqrt(), freqs.iter().copied())],
+        marks: vec![Curve { label: "paper".into(), points: vec![(75.0, 0.113), (600.0, 0.025)] }],
+        resolvable_m: Some((0.02, 0.125)),
+    };
+    check(
+        &wavelength(d, "wavelength", "lattice 25 x 13 at 1 cm", &[wl], &references).unwrap(),
+        &[
+            "frequency (Hz)",
+            "wavelength (cm)",
+            "metamaterial",
+            "A0 (analytic)",
+            "paper",
+            "resolvable range",
+            "lattice 25 x 13",
+        ],
+    );
 
     let pod = [
         curve("metamaterial", |n| 0.5f64.powf(n), (1..=30).map(f64::from)),
@@ -63,7 +80,11 @@ fn line_figures_render_to_png_and_svg() {
     check(&singular_value_energy(d, "sv", &[sv]).unwrap(), &["singular value index", "3.5 cm"]);
 
     let kappa = [curve("homogeneous", |d| 500.0 / d, [3.5, 6.5, 9.5].into_iter())];
-    check(&condition_numbers(d, "kappa", &kappa).unwrap(), &["domain edge (cm)", "condition number"]);
+    let paper = [Curve { label: "paper".into(), points: vec![(3.5, 236.0), (9.5, 51.5)] }];
+    check(
+        &condition_numbers(d, "kappa", "lattice at 1 cm", &kappa, &paper).unwrap(),
+        &["domain edge (cm)", "condition number", "paper", "lattice at 1 cm"],
+    );
 
     let response = [curve("metamaterial", |f| 1e-3 / f, freqs.iter().copied())];
     check(&driven_response(d, "response", &response).unwrap(), &["frequency (Hz)", "mean |G|"]);
@@ -82,12 +103,16 @@ fn map_figures_render_to_png_and_svg() {
             .collect()
     };
     let snaps = vec![("t = -1 ms".to_owned(), field(-1.0)), ("t = 0".to_owned(), field(0.0))];
-    check(&focus_snapshots(dir.path(), "focus", &grid, &snaps).unwrap(), &["x (cm)", "y (cm)", "t = 0"]);
+    let overlay = PlateOverlay { actuators_m: vec![(-0.12, 0.0), (0.12, 0.0)], supports_m: vec![(0.0, 0.05)] };
+    check(
+        &focus_snapshots(dir.path(), "focus", &grid, &snaps, "focus, 75 to 400 Hz", &overlay).unwrap(),
+        &["x (cm)", "y (cm)", "t = 0", "75 to 400 Hz"],
+    );
 
     let area: Vec<Option<f64>> = (0..grid.len()).map(|i| (i % 7 != 0).then_some(1.0 + i as f64 / 10.0)).collect();
     check(
-        &pixel_area_map(dir.path(), "area", &grid, &area, "median 2.7 cm^2").unwrap(),
-        &["x (cm)", "pixel area (cm^2)", "median 2.7 cm^2"],
+        &pixel_area_map(dir.path(), "area", &grid, &area, "median 2.7 cm^2", &overlay).unwrap(),
+        &["x (cm)", "pixel area (cm²)", "median 2.7 cm^2"],
     );
 }
 
@@ -96,9 +121,18 @@ fn unplottable_data_is_a_typed_error() {
     let d = Path::new("/nonexistent-never-written");
     assert!(matches!(pod_energy(d, "x", &[]), Err(FigureError::InvalidData { .. })));
     let nan = [Curve { label: "nan".into(), points: vec![(f64::NAN, 1.0), (1.0, f64::INFINITY)] }];
-    assert!(matches!(condition_numbers(d, "x", &nan), Err(FigureError::Draw { .. })));
+    assert!(matches!(condition_numbers(d, "x", "", &nan, &[]), Err(FigureError::Draw { .. })));
     let grid = GridSpec::centred(3, 3, 0.005);
-    assert!(matches!(pixel_area_map(d, "x", &grid, &[None; 9], "t"), Err(FigureError::InvalidData { .. })));
-    assert!(matches!(pixel_area_map(d, "x", &grid, &[Some(1.0); 4], "t"), Err(FigureError::InvalidData { .. })));
-    assert!(matches!(focus_snapshots(d, "x", &grid, &[]), Err(FigureError::InvalidData { .. })));
+    assert!(matches!(
+        pixel_area_map(d, "x", &grid, &[None; 9], "t", &PlateOverlay::default()),
+        Err(FigureError::InvalidData { .. })
+    ));
+    assert!(matches!(
+        pixel_area_map(d, "x", &grid, &[Some(1.0); 4], "t", &PlateOverlay::default()),
+        Err(FigureError::InvalidData { .. })
+    ));
+    assert!(matches!(
+        focus_snapshots(d, "x", &grid, &[], "", &PlateOverlay::default()),
+        Err(FigureError::InvalidData { .. })
+    ));
 }
