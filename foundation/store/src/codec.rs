@@ -20,6 +20,7 @@ use bytes::Bytes;
 use parquet::arrow::ArrowWriter;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::basic::Compression;
+use parquet::file::metadata::KeyValue;
 use parquet::file::properties::{EnabledStatistics, WriterProperties};
 use parquet::schema::types::ColumnPath;
 
@@ -32,7 +33,7 @@ use crate::schema::{self, Status, arrow_schema};
 /// statistics on the samples of `ir` (a page's min and max sample select nothing, and cost a pass over every
 /// sample); one row group per batch. Plain encoding: BYTE_STREAM_SPLIT made the files of noise-like responses 8%
 /// smaller with Snappy but decoded at two thirds of the speed. The reader assumes none of this.
-fn writer_properties() -> WriterProperties {
+fn writer_properties(key_values: Vec<KeyValue>) -> WriterProperties {
     // The Parquet path of the samples: Arrow writes a list as a repeated group `list` holding the item field.
     let ir_samples =
         ColumnPath::new(vec![schema::IR.to_string(), "list".to_string(), schema::ir_item_field().name().clone()]);
@@ -42,6 +43,7 @@ fn writer_properties() -> WriterProperties {
         .set_column_statistics_enabled(ir_samples, EnabledStatistics::None)
         .set_max_row_group_row_count(None)
         .set_max_row_group_bytes(None)
+        .set_key_value_metadata(Some(key_values))
         .build()
 }
 
@@ -79,8 +81,13 @@ fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::Ar
 ///
 /// # Errors
 /// [`StoreError::Arrow`] or [`StoreError::Parquet`] (including I/O errors of `sink`, which Parquet wraps).
-pub(crate) fn write_parquet(sink: impl Write + Send, records: &[IrRecord], file: &str) -> Result<(), StoreError> {
-    write_parquet_parts(sink, std::iter::once(Ok(records)), file)
+pub(crate) fn write_parquet(
+    sink: impl Write + Send,
+    records: &[IrRecord],
+    key_values: Vec<KeyValue>,
+    file: &str,
+) -> Result<(), StoreError> {
+    write_parquet_parts(sink, std::iter::once(Ok(records)), key_values, file)
 }
 
 /// Writes the records of `parts` as one Parquet file, one row group per part, so that a large file (a compaction)
@@ -91,10 +98,12 @@ pub(crate) fn write_parquet(sink: impl Write + Send, records: &[IrRecord], file:
 pub(crate) fn write_parquet_parts<P: AsRef<[IrRecord]>>(
     sink: impl Write + Send,
     parts: impl IntoIterator<Item = Result<P, StoreError>>,
+    key_values: Vec<KeyValue>,
     file: &str,
 ) -> Result<(), StoreError> {
     let parquet = |source| StoreError::Parquet { file: file.to_string(), source };
-    let mut writer = ArrowWriter::try_new(sink, arrow_schema(), Some(writer_properties())).map_err(parquet)?;
+    let properties = writer_properties(key_values);
+    let mut writer = ArrowWriter::try_new(sink, arrow_schema(), Some(properties)).map_err(parquet)?;
     for part in parts {
         let batch =
             to_record_batch(part?.as_ref()).map_err(|source| StoreError::Arrow { file: file.to_string(), source })?;
@@ -333,7 +342,7 @@ mod tests {
     fn parquet_round_trip_is_bit_exact() {
         let records = records();
         let mut bytes = Vec::new();
-        write_parquet(&mut bytes, &records, "t.parquet").unwrap();
+        write_parquet(&mut bytes, &records, Vec::new(), "t.parquet").unwrap();
         let decoded = read_parquet(Bytes::from(bytes), "t.parquet").unwrap();
         let back: Vec<IrRecord> = decoded.rows().map(|(meta, ir)| IrRecord { meta: *meta, ir: ir.to_vec() }).collect();
         assert_eq!(back.len(), records.len());
@@ -383,12 +392,12 @@ mod tests {
         // 90 rows of 40 000 samples: 14 MB, decoded some 6 rows at a time; into a `Decoded` that held another file.
         let records = many_records(90, 40_000);
         let mut bytes = Vec::new();
-        write_parquet(&mut bytes, &records, "t.parquet").unwrap();
+        write_parquet(&mut bytes, &records, Vec::new(), "t.parquet").unwrap();
         let mut decoded = read_parquet(Bytes::from(bytes.clone()), "t.parquet").unwrap();
         assert_decodes_to(bytes, &records);
         let small = self::records();
         let mut small_bytes = Vec::new();
-        write_parquet(&mut small_bytes, &small, "s.parquet").unwrap();
+        write_parquet(&mut small_bytes, &small, Vec::new(), "s.parquet").unwrap();
         read_parquet_into(Bytes::from(small_bytes), "s.parquet", &mut decoded).unwrap();
         assert_eq!(decoded.ir_offsets, [0, 3, 6]);
         assert_eq!(
@@ -421,7 +430,9 @@ mod tests {
             columns[7] = Arc::new(arrow_array::ListArray::new(element, offsets, values, nulls));
             RecordBatch::try_new(Arc::new(arrow_schema::Schema::new(fields)), columns).unwrap()
         };
-        for (batch, properties) in [(&batch, dictionary), (&batch, plain), (&nullable_items, writer_properties())] {
+        for (batch, properties) in
+            [(&batch, dictionary), (&batch, plain), (&nullable_items, writer_properties(Vec::new()))]
+        {
             let mut bytes = Vec::new();
             let mut writer = ArrowWriter::try_new(&mut bytes, batch.schema(), Some(properties)).unwrap();
             writer.write(batch).unwrap();

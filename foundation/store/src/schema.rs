@@ -15,11 +15,21 @@
 //! | `status` | utf8 | yes | quality flag, one of [`Status`] |
 //! | `retries` | u32 | yes | how many times the point was re-measured |
 //! | `measured_at` | timestamp (µs, UTC) | yes | when the response was measured |
+//!
+//! Every batch file also carries file-level key-value metadata ([`file_metadata`]), so that one file read alone says
+//! what it holds (polars and pyarrow keep these, where polars drops the fields' metadata): `metaplate.recipe`,
+//! `metaplate.scene` and `metaplate.scene_hash`, `metaplate.grid` (the grid as JSON: `nx`, `ny`, `spacing_m`,
+//! `origin_x_m`, `origin_y_m`), `metaplate.sample_rate_hz`, `metaplate.ir_unit` (`unstated` for a dataset without a
+//! [`DatasetDescription`]), `metaplate.pre_samples` (empty when unstated), `metaplate.software_version`,
+//! `metaplate.schema_version` and `metaplate.seed`.
 
 use std::collections::HashMap;
 use std::sync::{Arc, LazyLock};
 
 use arrow_schema::{DataType, Field, Schema, SchemaRef, TimeUnit};
+use parquet::file::metadata::KeyValue;
+
+use crate::manifest::{DatasetDescription, DatasetMeta};
 
 /// Column `point_index`: grid point index `iy * nx + ix` (u32).
 pub const POINT_INDEX: &str = "point_index";
@@ -127,6 +137,38 @@ static SCHEMA: LazyLock<SchemaRef> = LazyLock::new(|| {
 /// The Arrow schema of every batch file (see the module documentation for each column's meaning and unit).
 pub fn arrow_schema() -> SchemaRef {
     Arc::clone(&SCHEMA)
+}
+
+/// Prefix of every key of the file-level key-value metadata this crate writes.
+pub const FILE_METADATA_PREFIX: &str = "metaplate.";
+
+/// The file-level key-value metadata of a batch file of the dataset `meta` whose responses are sampled at
+/// `sample_rate_hz` (keys in the module documentation).
+pub fn file_metadata(meta: &DatasetMeta, sample_rate_hz: f64) -> Vec<KeyValue> {
+    let grid = &meta.grid;
+    let grid_json = serde_json::json!({
+        "nx": grid.nx, "ny": grid.ny, "spacing_m": grid.spacing_m,
+        "origin_x_m": grid.origin_x_m, "origin_y_m": grid.origin_y_m,
+    });
+    let (ir_unit, pre_samples) = match &meta.description {
+        Some(DatasetDescription { ir_unit, pre_samples }) => (ir_unit.clone(), pre_samples.to_string()),
+        None => ("unstated".to_owned(), String::new()),
+    };
+    [
+        ("recipe", meta.recipe.clone()),
+        ("scene", meta.scene.name.clone()),
+        ("scene_hash", meta.scene.hash.clone()),
+        ("grid", grid_json.to_string()),
+        ("sample_rate_hz", sample_rate_hz.to_string()),
+        ("ir_unit", ir_unit),
+        ("pre_samples", pre_samples),
+        ("software_version", meta.software_version.clone()),
+        ("schema_version", meta.schema_version.to_string()),
+        ("seed", meta.seed.to_string()),
+    ]
+    .into_iter()
+    .map(|(key, value)| KeyValue::new(format!("{FILE_METADATA_PREFIX}{key}"), value))
+    .collect()
 }
 
 /// Whether `found` can be read as the column type `expected`: equal, except that a list's item field may have any

@@ -16,7 +16,7 @@ use metaplate_dsp::deconv::{DeconvConfig, deconvolve_with_reference};
 use metaplate_dsp::equalise::{EqualiserConfig, design_equaliser};
 use metaplate_dsp::kirkeby::{KirkebyConfig, KirkebyFilter};
 use metaplate_dsp::sweep::SweepSpec;
-use metaplate_store::{Dataset, DatasetMeta, GridSpec, IrMeta, IrRecord, Status};
+use metaplate_store::{Dataset, DatasetDescription, DatasetMeta, GridSpec, IrMeta, IrRecord, Status};
 use serde_json::{Map, Value, json};
 
 use crate::drive::{DrivePlayback, excitation};
@@ -181,7 +181,11 @@ pub fn calibrate(
         out.software_version.clone(),
         cfg.seed,
         CALIBRATION_GRID,
-    );
+    )
+    .with_description(DatasetDescription {
+        ir_unit: "by ix: 0 filter taps, 1/(m/s per full scale); 1 and 2 responses, m/s per full scale".into(),
+        pre_samples: u32::try_from(cfg.deconv.pre_samples).unwrap_or(u32::MAX),
+    });
     let mut run = Run::open(out, meta, rig.clock.clone(), control)?;
     let total = sites_m.len();
     let is_committed = |a: usize| run.committed_keys.contains(&(FILTER_IX, a as u16));

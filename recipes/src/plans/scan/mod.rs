@@ -26,7 +26,7 @@ use metaplate_core::grid::GridSpec;
 use metaplate_core::rig::Rig;
 use metaplate_dsp::deconv::DeconvConfig;
 use metaplate_dsp::excitation::{ExcitationProtocol, Scheme};
-use metaplate_store::{DatasetMeta, Status};
+use metaplate_store::{DatasetDescription, DatasetMeta, Status};
 use serde_json::{Map, Value, json};
 
 use crate::drive::excitation;
@@ -203,7 +203,14 @@ pub fn scan(
         out.software_version.clone(),
         cfg.seed,
         plan.grid,
-    );
+    )
+    .with_description(DatasetDescription {
+        ir_unit: match calibration {
+            Some(_) => "m/s per full-scale drive, through the calibration's inverse filters".into(),
+            None => "m/s per full-scale drive".into(),
+        },
+        pre_samples: u32::try_from(cfg.protocol.deconv.pre_samples).unwrap_or(u32::MAX),
+    });
     let mut run = Run::open(out, meta, rig.clock.clone(), control)?;
     let is_committed = |p: usize| (0..actuators).all(|a| run.committed_keys.contains(&(p as u32, a as u16)));
     let todo: VecDeque<usize> = plan.points.iter().copied().filter(|&p| !is_committed(p)).collect();
