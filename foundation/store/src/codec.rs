@@ -26,7 +26,7 @@ use parquet::schema::types::ColumnPath;
 
 use crate::error::StoreError;
 use crate::record::{IrMeta, IrRecord};
-use crate::schema::{self, Status, arrow_schema};
+use crate::schema::{self, RowKind, Status, arrow_schema};
 
 /// Writer settings: Snappy (pure Rust, read by every Parquet reader); no dictionaries, which only cost time on
 /// impulse responses (nearly every f32 distinct) and save nothing worth having on the small key columns; no
@@ -73,6 +73,7 @@ fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::Ar
             TimestampMicrosecondArray::from_iter(metas().map(|m| m.measured_at_unix_us))
                 .with_timezone(schema::MEASURED_AT_TZ),
         ),
+        Arc::new(StringArray::from_iter(metas().map(|m| m.kind.map(RowKind::as_str)))),
     ];
     RecordBatch::try_new(arrow_schema(), columns)
 }
@@ -197,6 +198,8 @@ pub(crate) fn read_parquet_into(bytes: Bytes, file: &str, out: &mut Decoded) -> 
 fn check_schema(found: &arrow_schema::Schema, file: &str) -> Result<(), StoreError> {
     for expected in arrow_schema().fields() {
         let reason = match found.field_with_name(expected.name()) {
+            // Files written before the column existed.
+            Err(_) if expected.name() == schema::KIND => continue,
             Err(_) => format!("column {} is missing", expected.name()),
             Ok(f) if !schema::compatible(expected.data_type(), f.data_type()) => {
                 format!("column {} has type {}, expected {}", f.name(), f.data_type(), expected.data_type())
@@ -255,6 +258,10 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
         .column_by_name(schema::STATUS)
         .and_then(|c| c.as_string_opt::<i32>())
         .ok_or_else(|| mismatch("column status is missing or not utf8"))?;
+    let kind = match batch.column_by_name(schema::KIND) {
+        None => None,
+        Some(c) => Some(c.as_string_opt::<i32>().ok_or_else(|| mismatch("column kind is not utf8"))?),
+    };
     let ir = batch
         .column_by_name(schema::IR)
         .and_then(|c| c.as_list_opt::<i32>())
@@ -277,6 +284,13 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
             let text = status.value(row);
             Some(Status::parse(text).ok_or_else(|| invalid(format!("unknown status {text:?}")))?)
         };
+        let kind = match kind {
+            Some(kind) if !kind.is_null(row) => {
+                let text = kind.value(row);
+                Some(RowKind::parse(text).ok_or_else(|| invalid(format!("unknown kind {text:?}")))?)
+            }
+            _ => None,
+        };
         out.metas.push(IrMeta {
             point_index: required(point_index, row, schema::POINT_INDEX, &location)?,
             ix: required(ix, row, schema::IX, &location)?,
@@ -289,6 +303,7 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
             status,
             retries: optional(retries, row),
             measured_at_unix_us: optional(measured_at, row),
+            kind,
         });
         if ir.is_null(row) {
             return Err(invalid("ir is null".into()));
@@ -331,6 +346,7 @@ mod tests {
         first.status = Some(Status::ReMeasured);
         first.retries = Some(2);
         first.measured_at_unix_us = Some(1_767_225_600_000_000);
+        first.kind = Some(RowKind::Verification);
         let second = IrMeta::at_grid(&grid, 0, 1, 0, 24_000.0).unwrap();
         vec![
             IrRecord { meta: first, ir: vec![1.5, -0.0, f32::MIN_POSITIVE / 2.0] },
@@ -364,6 +380,19 @@ mod tests {
         writer.close().unwrap();
         let err = read_parquet(Bytes::from(bytes), "t.parquet").unwrap_err();
         assert!(matches!(err, StoreError::SchemaMismatch { ref reason, .. } if reason.contains("ir")), "{err}");
+    }
+
+    #[test]
+    fn a_file_written_before_the_kind_column_reads_with_no_kind() {
+        let batch = to_record_batch(&records()).unwrap();
+        let without_kind = batch.project(&[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]).unwrap();
+        let mut bytes = Vec::new();
+        let mut writer = ArrowWriter::try_new(&mut bytes, without_kind.schema(), None).unwrap();
+        writer.write(&without_kind).unwrap();
+        writer.close().unwrap();
+        let decoded = read_parquet(Bytes::from(bytes), "t.parquet").unwrap();
+        assert!(decoded.metas.iter().all(|m| m.kind.is_none()));
+        assert_eq!(decoded.metas[0].status, Some(Status::ReMeasured));
     }
 
     /// Records of `rows` rows with `len`-sample responses, every sample distinct.

@@ -46,6 +46,6 @@ pub use manifest::{
 pub use reader::{BatchRows, Dataset, ReadOptions};
 pub use record::{IrMeta, IrRecord};
 pub use resume::{Quarantined, ResumeReport};
-pub use schema::Status;
+pub use schema::{RowKind, Status};
 pub use wav::{export_wav, read_wav, write_wav_f32};
 pub use writer::{DatasetWriter, IfExists, QUARANTINE_DIR};

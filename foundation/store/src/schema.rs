@@ -15,6 +15,7 @@
 //! | `status` | utf8 | yes | quality flag, one of [`Status`] |
 //! | `retries` | u32 | yes | how many times the point was re-measured |
 //! | `measured_at` | timestamp (µs, UTC) | yes | when the response was measured |
+//! | `kind` | utf8 | yes | what a row of a calibration dataset is, one of [`RowKind`] (`filter`, `response`, `verification`); null elsewhere. Optional when reading: files written before it existed lack the column |
 //!
 //! Every batch file also carries file-level key-value metadata ([`file_metadata`]), so that one file read alone says
 //! what it holds (polars and pyarrow keep these, where polars drops the fields' metadata): `metaplate.recipe`,
@@ -55,6 +56,38 @@ pub const STATUS: &str = "status";
 pub const RETRIES: &str = "retries";
 /// Column `measured_at`: measurement time (timestamp in µs since the Unix epoch, UTC; nullable).
 pub const MEASURED_AT: &str = "measured_at";
+/// Column `kind`: what a calibration row is (utf8, nullable; see [`RowKind`]).
+pub const KIND: &str = "kind";
+
+/// What a row of a calibration dataset holds (column `kind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RowKind {
+    /// An inverse filter's taps.
+    Filter,
+    /// A measured response.
+    Response,
+    /// A verification response, measured through the filter.
+    Verification,
+}
+
+impl RowKind {
+    /// Every kind, in the order of the enum.
+    pub const ALL: [RowKind; 3] = [RowKind::Filter, RowKind::Response, RowKind::Verification];
+
+    /// The string stored in the `kind` column.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RowKind::Filter => "filter",
+            RowKind::Response => "response",
+            RowKind::Verification => "verification",
+        }
+    }
+
+    /// Parses a `kind` column string; `None` if it is not one of [`RowKind::as_str`]'s values.
+    pub fn parse(s: &str) -> Option<RowKind> {
+        RowKind::ALL.into_iter().find(|kind| kind.as_str() == s)
+    }
+}
 
 /// Name of the list items of the `ir` column (Arrow's default for a list).
 const IR_ITEM: &str = "item";
@@ -131,6 +164,7 @@ static SCHEMA: LazyLock<SchemaRef> = LazyLock::new(|| {
         field(STATUS, DataType::Utf8, true, None),
         field(RETRIES, DataType::UInt32, true, None),
         field(MEASURED_AT, DataType::Timestamp(TimeUnit::Microsecond, Some(MEASURED_AT_TZ.into())), true, None),
+        field(KIND, DataType::Utf8, true, None),
     ]))
 });
 
@@ -204,7 +238,7 @@ mod tests {
         let names: Vec<_> = schema.fields().iter().map(|f| f.name().as_str()).collect();
         assert_eq!(
             names,
-            [POINT_INDEX, IX, IY, X_M, Y_M, ACTUATOR, SAMPLE_RATE_HZ, IR, SNR_DB, STATUS, RETRIES, MEASURED_AT]
+            [POINT_INDEX, IX, IY, X_M, Y_M, ACTUATOR, SAMPLE_RATE_HZ, IR, SNR_DB, STATUS, RETRIES, MEASURED_AT, KIND]
         );
         let unit = |name: &str| schema.field_with_name(name).ok().and_then(|f| f.metadata().get("unit").cloned());
         assert_eq!(unit(X_M).as_deref(), Some("m"));
@@ -212,7 +246,7 @@ mod tests {
         assert_eq!(unit(SNR_DB).as_deref(), Some("dB"));
         // Keys and the response itself are required; the quality columns are filled only by scans.
         for f in schema.fields() {
-            let optional = [SNR_DB, STATUS, RETRIES, MEASURED_AT].contains(&f.name().as_str());
+            let optional = [SNR_DB, STATUS, RETRIES, MEASURED_AT, KIND].contains(&f.name().as_str());
             assert_eq!(f.is_nullable(), optional, "{}", f.name());
         }
     }

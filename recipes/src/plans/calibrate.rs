@@ -2,7 +2,8 @@
 //! inverse filter, and a verification measurement through the filter; one commit per actuator.
 //!
 //! The calibration dataset is a store dataset on a 3 x 1 "grid" whose columns are the three responses kept per
-//! actuator, each row at the magnet's position (x_m, y_m):
+//! actuator, each row at the magnet's position (x_m, y_m), its `kind` column saying what it is (readers go by
+//! `kind`, [`calibration_row`]; the grid column keeps the store's (point, actuator) keys distinct):
 //! - `ix = 0` ([`FILTER_IX`]): the Kirkeby filter taps (1 / (m/s per full scale), normalised so that the compensated
 //!   actuator's in-band gain is its uncompensated median gain);
 //! - `ix = 1` ([`RESPONSE_IX`]): the measured response, m/s per full scale, two-sided (`pre_samples` before time 0);
@@ -16,7 +17,7 @@ use metaplate_dsp::deconv::{DeconvConfig, deconvolve_with_reference};
 use metaplate_dsp::equalise::{EqualiserConfig, design_equaliser};
 use metaplate_dsp::kirkeby::{KirkebyConfig, KirkebyFilter};
 use metaplate_dsp::sweep::SweepSpec;
-use metaplate_store::{Dataset, DatasetDescription, DatasetMeta, GridSpec, IrMeta, IrRecord, Status};
+use metaplate_store::{Dataset, DatasetDescription, DatasetMeta, GridSpec, IrMeta, IrRecord, RowKind, Status};
 use serde_json::{Map, Value, json};
 
 use crate::drive::{DrivePlayback, excitation};
@@ -34,7 +35,7 @@ use crate::quality::{Flatness, smoothed_flatness};
 
 /// Recipe name in the manifest.
 pub const RECIPE: &str = "calibrate";
-/// Grid column of the filter taps.
+/// Grid column of the filter taps (`kind` filter).
 pub const FILTER_IX: u32 = 0;
 /// Grid column of the measured response.
 pub const RESPONSE_IX: u32 = 1;
@@ -183,7 +184,7 @@ pub fn calibrate(
         CALIBRATION_GRID,
     )
     .with_description(DatasetDescription {
-        ir_unit: "by ix: 0 filter taps, 1/(m/s per full scale); 1 and 2 responses, m/s per full scale".into(),
+        ir_unit: "by kind: filter taps 1/(m/s per full scale); response and verification m/s per full scale".into(),
         pre_samples: u32::try_from(cfg.deconv.pre_samples).unwrap_or(u32::MAX),
     });
     let mut run = Run::open(out, meta, rig.clock.clone(), control)?;
@@ -237,20 +238,22 @@ impl ActuatorMeasurement {
     fn records(&self, actuator: usize, (x_m, y_m): (f64, f64), fs: f64) -> Result<Vec<IrRecord>, RecipeError> {
         // Every repeat counts: design attempts after the first and repeated acquisitions.
         let retries = self.calibration.attempts.saturating_sub(1) + self.acquisition_retries;
-        let rows: [(u32, &[f64]); 3] = [
-            (FILTER_IX, &self.calibration.filter.taps),
-            (RESPONSE_IX, &self.response),
-            (VERIFY_IX, &self.verification),
+        let rows: [(RowKind, &[f64]); 3] = [
+            (RowKind::Filter, &self.calibration.filter.taps),
+            (RowKind::Response, &self.response),
+            (RowKind::Verification, &self.verification),
         ];
         rows.iter()
-            .map(|(ix, ir)| {
+            .map(|(kind, ir)| {
+                let ix = kind_ix(*kind);
                 let meta = IrMeta {
                     x_m,
                     y_m,
                     status: Some(self.calibration.status),
                     retries: Some(retries),
                     measured_at_unix_us: Some(now_unix_us()),
-                    ..IrMeta::at_grid(&CALIBRATION_GRID, *ix, 0, actuator as u16, fs)?
+                    kind: Some(*kind),
+                    ..IrMeta::at_grid(&CALIBRATION_GRID, ix, 0, actuator as u16, fs)?
                 };
                 Ok(IrRecord { meta, ir: ir.iter().map(|v| *v as f32).collect() })
             })
@@ -437,11 +440,15 @@ impl Calibration {
         let mut statuses = Vec::with_capacity(actuators);
         for a in 0..actuators {
             let key = a as u16;
-            let (Some(taps), Some(meta)) = (dataset.ir(FILTER_IX, key), dataset.meta(FILTER_IX, key)) else {
+            let filter_row = calibration_row(&dataset, RowKind::Filter, key);
+            let (Some(taps), Some(meta)) =
+                (filter_row.and_then(|r| dataset.row_ir(r)), filter_row.and_then(|r| dataset.rows().get(r)))
+            else {
                 return Err(bad(format!("actuator {a} is not calibrated (run calibrate again with --resume)")));
             };
             let taps: Vec<f64> = taps.iter().map(|v| f64::from(*v)).collect();
-            let max_boost_db = match dataset.ir(RESPONSE_IX, key) {
+            let response = calibration_row(&dataset, RowKind::Response, key).and_then(|r| dataset.row_ir(r));
+            let max_boost_db = match response {
                 Some(response) => boost_db(&taps, response, fs, band)?,
                 None => return Err(bad(format!("actuator {a}'s measured response is missing"))),
             };
@@ -463,6 +470,26 @@ impl Calibration {
         }
         Ok(Self { filters, statuses, content_hash: metaplate_store::sha256(identity.as_bytes()) })
     }
+}
+
+/// The grid column a calibration row of `kind` is written in.
+fn kind_ix(kind: RowKind) -> u32 {
+    match kind {
+        RowKind::Filter => FILTER_IX,
+        RowKind::Response => RESPONSE_IX,
+        RowKind::Verification => VERIFY_IX,
+    }
+}
+
+/// The row of the calibration dataset `dataset` that holds `kind` for `actuator`: by its `kind` column, or, in a
+/// calibration written before the column existed (no row has a kind), by the grid column it was written in.
+pub fn calibration_row(dataset: &Dataset, kind: RowKind, actuator: u16) -> Option<usize> {
+    let rows = dataset.rows();
+    let by_kind = rows.iter().position(|m| m.actuator == actuator && m.kind == Some(kind));
+    if by_kind.is_some() || rows.iter().any(|m| m.kind.is_some()) {
+        return by_kind;
+    }
+    rows.iter().position(|m| m.actuator == actuator && m.ix == kind_ix(kind))
 }
 
 /// `20 log10(max |H| max |C_n|)`, dB, with `C_n` the response normalised by its median in-band gain as the design

@@ -3,7 +3,8 @@
 
 usage: read_dataset.py RUN_DIR EXPECTED.json
 
-EXPECTED.json: {"rows": N, "ir_len": L, "point_index": P, "actuator": A, "ir_head": [first samples of that IR]}.
+EXPECTED.json: {"rows": N, "ir_len": L, "point_index": P, "actuator": A, "ir_head": [first samples of that IR],
+"file_metadata": {key: value}} (every batch file's key-value metadata; "metaplate.grid" compared as JSON).
 The committed files are those the journal lists (journal.jsonl; each line's crc32 is zlib.crc32 of the line without
 its crc32 field); a compaction line supersedes the files it lists, a quarantine line removes its file. Exits nonzero,
 saying why, on any mismatch.
@@ -32,6 +33,7 @@ COLUMNS = {
     "status": (pl.String, pa.string()),
     "retries": (pl.UInt32, pa.uint32()),
     "measured_at": (pl.Datetime("us", "UTC"), pa.timestamp("us", tz="UTC")),
+    "kind": (pl.String, pa.string()),
 }
 
 
@@ -86,6 +88,13 @@ def main() -> None:
     index = keys.index((expected["point_index"], expected["actuator"]))
     check(table["ir"][index].as_py()[: len(expected["ir_head"])] == expected["ir_head"], "pyarrow ir head")
     check(len(set(keys)) == len(keys), "duplicate (point, actuator) keys")
+    for f in files:
+        found = {k.decode(): v.decode() for k, v in pq.read_metadata(f).metadata.items() if k.startswith(b"metaplate.")}
+        polars_found = {k: v for k, v in pl.read_parquet_metadata(f).items() if k.startswith("metaplate.")}
+        check(found == polars_found, f"{f.name}: polars and pyarrow disagree on the key-value metadata")
+        for key, value in expected["file_metadata"].items():
+            got = json.loads(found.get(key, "null")) if key == "metaplate.grid" else found.get(key)
+            check(got == value, f"{f.name}: {key} is {got!r}, expected {value!r}")
     print(f"ok: {len(files)} files, {df.height} rows, read by polars {pl.__version__} and pyarrow {pa.__version__}")
 
 
