@@ -195,3 +195,67 @@ fn a_malformed_file_names_the_record_and_line() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("record 1 (dataset 58), line 9"), "{stderr}");
 }
+
+/// The export benchmark (README's benchmark table): a full-size synthetic dataset, 1225 points (the metamaterial
+/// scene's 49 x 25 grid) x 8 actuators x 12000 f32 samples (470 MB), written through the store, then exported by the
+/// binary in each format; prints MB/s and records/s as `metaplate export` reports them.
+/// `cargo test -p metaplate-cli --test uff -- --ignored export_benchmark --nocapture` (DIR: `$METAPLATE_BENCH_DIR`,
+/// default the target's temporary directory; about 6 GB of disk for the ASCII double file).
+#[test]
+#[ignore = "a benchmark: writes 470 MB and exports it several times"]
+fn export_benchmark() {
+    use metaplate_core::scene::Scene;
+    use metaplate_store::{DatasetMeta, DatasetWriter, IfExists, IrMeta, IrRecord, Status};
+
+    let base = std::env::var_os("METAPLATE_BENCH_DIR")
+        .map_or_else(|| Path::new(env!("CARGO_TARGET_TMPDIR")).join("uff-bench"), PathBuf::from);
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).unwrap();
+    let data = base.join("full");
+    let scene = Scene::builtin("metamaterial").unwrap();
+    let grid = scene.grid;
+    let config = serde_json::json!({"synthetic": true}).as_object().cloned().unwrap();
+    let meta = DatasetMeta::new("simulate-greens", config, scene.id(), "bench", 1, grid);
+    let mut writer = DatasetWriter::create(&data, meta, IfExists::Refuse).unwrap();
+    let (ir_len, actuators) = (12_000usize, 8u16);
+    // Decaying, noise-like responses (incompressible, as measurements are), deterministic.
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut noise = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+    };
+    for first in (0..grid.len()).step_by(25) {
+        let mut batch = Vec::new();
+        for p in first..(first + 25).min(grid.len()) {
+            let (ix, iy) = grid.indices(p);
+            for actuator in 0..actuators {
+                let mut meta = IrMeta::at_grid(&grid, ix as u32, iy as u32, actuator, 24_000.0).unwrap();
+                meta.status = Some(Status::GroundTruth);
+                let ir = (0..ir_len).map(|i| noise() * (-(i as f32) / 3000.0).exp() * 1e-3).collect();
+                batch.push(IrRecord { meta, ir });
+            }
+        }
+        writer.commit_batch(&batch).unwrap();
+    }
+    writer.finish().unwrap();
+    for (format, precision, frequency) in [
+        ("uff58b", "single", false),
+        ("uff58b", "double", false),
+        ("uff58b", "single", true),
+        ("uff58", "single", false),
+    ] {
+        let out = base.join("full.uff");
+        let mut args = vec!["export", "--data", data.to_str().unwrap(), "--format", format, "--precision", precision];
+        args.extend(["--out", out.to_str().unwrap()]);
+        if frequency {
+            args.push("--frequency");
+        }
+        let report = ok(&args);
+        let line = String::from_utf8_lossy(&report.stderr).lines().last().unwrap_or_default().to_owned();
+        println!("{format} {precision}{}: {line}", if frequency { " --frequency" } else { "" });
+        std::fs::remove_file(&out).unwrap();
+    }
+    std::fs::remove_dir_all(&base).unwrap();
+}

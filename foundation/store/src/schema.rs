@@ -10,7 +10,7 @@
 //! | `x_m`, `y_m` | f64 | no | where the response was taken, m (plate coordinates) |
 //! | `actuator` | u16 | no | actuator number (audio interface channel, 0-based) |
 //! | `sample_rate_hz` | f64 | no | sample rate of `ir`, Hz; the same for every row of a dataset |
-//! | `ir` | list of f32 | no | impulse response, output per unit input (a scan: surface velocity in m/s per full-scale drive; the recipe in the manifest says) |
+//! | `ir` | list of f32 | no | impulse response, output per unit input (a scan: surface velocity in m/s per full-scale drive; the key-value metadata's `metaplate.ir_unit` and the manifest's `description` say) |
 //! | `snr_db` | f64 | yes | signal-to-noise ratio of the measurement, dB |
 //! | `status` | utf8 | yes | quality flag, one of [`Status`] |
 //! | `retries` | u32 | yes | how many times the point was re-measured |
