@@ -7,7 +7,7 @@ use std::io::Write;
 use std::ops::Range;
 use std::sync::Arc;
 
-use arrow_array::builder::{Float32Builder, ListBuilder};
+use arrow_array::builder::{FixedSizeListBuilder, Float32Builder};
 use arrow_array::cast::AsArray;
 use arrow_array::types::{
     ArrowPrimitiveType, Float32Type, Float64Type, TimestampMicrosecondType, UInt16Type, UInt32Type,
@@ -47,11 +47,14 @@ fn writer_properties(key_values: Vec<KeyValue>) -> WriterProperties {
         .build()
 }
 
-/// Assembles checked records into one Arrow record batch of the dataset schema.
+/// Assembles checked records (one IR length) into one Arrow record batch of the dataset schema.
 fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::ArrowError> {
     let metas = || records.iter().map(|r| &r.meta);
     let samples: usize = records.iter().map(|r| r.ir.len()).sum();
-    let mut ir = ListBuilder::with_capacity(Float32Builder::with_capacity(samples), records.len())
+    let ir_len = records.first().map_or(0, |r| r.ir.len());
+    let ir_len = i32::try_from(ir_len)
+        .map_err(|_| arrow_schema::ArrowError::InvalidArgumentError(format!("ir of {ir_len} samples")))?;
+    let mut ir = FixedSizeListBuilder::with_capacity(Float32Builder::with_capacity(samples), ir_len, records.len())
         .with_field(Arc::new(schema::ir_item_field()));
     for record in records {
         ir.values().append_slice(&record.ir);
@@ -75,7 +78,7 @@ fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::Ar
         ),
         Arc::new(StringArray::from_iter(metas().map(|m| m.kind.map(RowKind::as_str)))),
     ];
-    RecordBatch::try_new(arrow_schema(), columns)
+    RecordBatch::try_new(arrow_schema(ir_len), columns)
 }
 
 /// Writes `records` as one Parquet file (one row group) to `sink`; `file` names it in errors.
@@ -103,16 +106,43 @@ pub(crate) fn write_parquet_parts<P: AsRef<[IrRecord]>>(
     file: &str,
 ) -> Result<(), StoreError> {
     let parquet = |source| StoreError::Parquet { file: file.to_string(), source };
-    let properties = writer_properties(key_values);
-    let mut writer = ArrowWriter::try_new(sink, arrow_schema(), Some(properties)).map_err(parquet)?;
+    // Opened with the first part: the schema's `ir` size is the parts' IR length.
+    let (mut sink, mut properties) = (Some(sink), Some(writer_properties(key_values)));
+    let mut writer = None;
     for part in parts {
         let batch =
             to_record_batch(part?.as_ref()).map_err(|source| StoreError::Arrow { file: file.to_string(), source })?;
+        let writer = match &mut writer {
+            Some(writer) => writer,
+            None => writer.insert(
+                ArrowWriter::try_new(
+                    sink.take().into_iter().next().ok_or_else(no_sink(file))?,
+                    batch.schema(),
+                    properties.take(),
+                )
+                .map_err(parquet)?,
+            ),
+        };
         writer.write(&batch).map_err(parquet)?;
         writer.flush().map_err(parquet)?;
     }
+    let writer = match (writer, sink) {
+        (Some(writer), _) => writer,
+        // No part: an empty file of the schema.
+        (None, Some(sink)) => ArrowWriter::try_new(sink, arrow_schema(0), properties).map_err(parquet)?,
+        (None, None) => return Err(no_sink(file)()),
+    };
     writer.close().map_err(parquet)?;
     Ok(())
+}
+
+/// The error of a sink used twice (not reachable: the writer takes it once).
+fn no_sink(file: &str) -> impl Fn() -> StoreError + '_ {
+    move || StoreError::Io {
+        op: "write",
+        path: file.into(),
+        source: std::io::Error::other("internal: the Parquet sink was already taken"),
+    }
 }
 
 /// The rows of one batch file: metadata per row, and the impulse responses back to back (row `r` spans
@@ -196,7 +226,7 @@ pub(crate) fn read_parquet_into(bytes: Bytes, file: &str, out: &mut Decoded) -> 
 /// Checks that every column of the dataset schema is present with a readable type (extra columns are ignored, so
 /// that a later schema version's additions do not break old readers of the same version).
 fn check_schema(found: &arrow_schema::Schema, file: &str) -> Result<(), StoreError> {
-    for expected in arrow_schema().fields() {
+    for expected in arrow_schema(1).fields() {
         let reason = match found.field_with_name(expected.name()) {
             // Files written before the column existed.
             Err(_) if expected.name() == schema::KIND => continue,
@@ -262,12 +292,20 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
         None => None,
         Some(c) => Some(c.as_string_opt::<i32>().ok_or_else(|| mismatch("column kind is not utf8"))?),
     };
-    let ir = batch
-        .column_by_name(schema::IR)
-        .and_then(|c| c.as_list_opt::<i32>())
-        .ok_or_else(|| mismatch("column ir is missing or not a list"))?;
-    let ir_values = ir.values().as_primitive_opt::<Float32Type>().ok_or_else(|| mismatch("ir items are not f32"))?;
-    let ir_offsets = ir.value_offsets();
+    let ir = batch.column_by_name(schema::IR).ok_or_else(|| mismatch("column ir is missing"))?;
+    // A fixed-size list (this version), or a list (files written before): the items and each row's offsets.
+    let fixed_offsets: Vec<i32>;
+    let (ir_items, ir_offsets): (&ArrayRef, &[i32]) = if let Some(list) = ir.as_list_opt::<i32>() {
+        (list.values(), list.value_offsets())
+    } else if let Some(list) = ir.as_fixed_size_list_opt() {
+        let len = list.value_length();
+        let rows = i32::try_from(list.len()).map_err(|_| mismatch("too many rows"))?;
+        fixed_offsets = (0..=rows).map(|r| r.saturating_mul(len)).collect();
+        (list.values(), &fixed_offsets)
+    } else {
+        return Err(mismatch("column ir is not a list"));
+    };
+    let ir_values = ir_items.as_primitive_opt::<Float32Type>().ok_or_else(|| mismatch("ir items are not f32"))?;
 
     let values = ir_values.values();
     // The samples of this batch's rows are copied in one go after the loop: `span` of the child array (a list array
@@ -450,13 +488,17 @@ mod tests {
         let batch = to_record_batch(&records).unwrap();
         let nullable_items = {
             let mut fields: Vec<arrow_schema::Field> =
-                arrow_schema().fields().iter().map(|f| f.as_ref().clone()).collect();
+                batch.schema().fields().iter().map(|f| f.as_ref().clone()).collect();
             let element = Arc::new(arrow_schema::Field::new("element", arrow_schema::DataType::Float32, true));
             fields[7] = arrow_schema::Field::new(schema::IR, arrow_schema::DataType::List(Arc::clone(&element)), true);
-            let ir = batch.column(7).as_list::<i32>().clone();
-            let (_, offsets, values, nulls) = ir.into_parts();
+            // As files written before `ir` was fixed-size: a list.
+            let mut ir = arrow_array::builder::ListBuilder::new(Float32Builder::new()).with_field(Arc::clone(&element));
+            for record in &records {
+                ir.values().append_slice(&record.ir);
+                ir.append(true);
+            }
             let mut columns = batch.columns().to_vec();
-            columns[7] = Arc::new(arrow_array::ListArray::new(element, offsets, values, nulls));
+            columns[7] = Arc::new(ir.finish());
             RecordBatch::try_new(Arc::new(arrow_schema::Schema::new(fields)), columns).unwrap()
         };
         for (batch, properties) in

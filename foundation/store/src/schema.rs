@@ -10,7 +10,7 @@
 //! | `x_m`, `y_m` | f64 | no | where the response was taken, m (plate coordinates) |
 //! | `actuator` | u16 | no | actuator number (audio interface channel, 0-based) |
 //! | `sample_rate_hz` | f64 | no | sample rate of `ir`, Hz; the same for every row of a dataset |
-//! | `ir` | list of f32 | no | impulse response, output per unit input (a scan: surface velocity in m/s per full-scale drive; the key-value metadata's `metaplate.ir_unit` and the manifest's `description` say) |
+//! | `ir` | fixed-size list of f32 (one size per dataset; files written before it existed hold a list) | no | impulse response, output per unit input (a scan: surface velocity in m/s per full-scale drive; the key-value metadata's `metaplate.ir_unit` and the manifest's `description` say) |
 //! | `snr_db` | f64 | yes | signal-to-noise ratio of the measurement, dB |
 //! | `status` | utf8 | yes | quality flag, one of [`Status`] |
 //! | `retries` | u32 | yes | how many times the point was re-measured |
@@ -25,7 +25,7 @@
 //! `metaplate.schema_version` and `metaplate.seed`.
 
 use std::collections::HashMap;
-use std::sync::{Arc, LazyLock};
+use std::sync::Arc;
 
 use arrow_schema::{DataType, Field, Schema, SchemaRef, TimeUnit};
 use parquet::file::metadata::KeyValue;
@@ -149,7 +149,10 @@ pub(crate) fn ir_item_field() -> Field {
 /// Time zone of the `measured_at` column.
 pub(crate) const MEASURED_AT_TZ: &str = "UTC";
 
-static SCHEMA: LazyLock<SchemaRef> = LazyLock::new(|| {
+/// The Arrow schema of a batch file whose responses are `ir_len` samples long (see the module documentation for
+/// each column's meaning and unit): `ir` is a fixed-size list, which polars reads as an Array and NumPy as a 2-D
+/// array without copies.
+pub fn arrow_schema(ir_len: i32) -> SchemaRef {
     Arc::new(Schema::new(vec![
         field(POINT_INDEX, DataType::UInt32, false, None),
         field(IX, DataType::UInt32, false, None),
@@ -158,19 +161,14 @@ static SCHEMA: LazyLock<SchemaRef> = LazyLock::new(|| {
         field(Y_M, DataType::Float64, false, Some("m")),
         field(ACTUATOR, DataType::UInt16, false, None),
         field(SAMPLE_RATE_HZ, DataType::Float64, false, Some("Hz")),
-        // No unit: it depends on the recipe (the manifest's configuration says what drives and what is measured).
-        field(IR, DataType::List(Arc::new(ir_item_field())), false, None),
+        // No field unit: the file's key-value metadata states it (`metaplate.ir_unit`).
+        field(IR, DataType::FixedSizeList(Arc::new(ir_item_field()), ir_len), false, None),
         field(SNR_DB, DataType::Float64, true, Some("dB")),
         field(STATUS, DataType::Utf8, true, None),
         field(RETRIES, DataType::UInt32, true, None),
         field(MEASURED_AT, DataType::Timestamp(TimeUnit::Microsecond, Some(MEASURED_AT_TZ.into())), true, None),
         field(KIND, DataType::Utf8, true, None),
     ]))
-});
-
-/// The Arrow schema of every batch file (see the module documentation for each column's meaning and unit).
-pub fn arrow_schema() -> SchemaRef {
-    Arc::clone(&SCHEMA)
 }
 
 /// Prefix of every key of the file-level key-value metadata this crate writes.
@@ -205,12 +203,19 @@ pub fn file_metadata(meta: &DatasetMeta, sample_rate_hz: f64) -> Vec<KeyValue> {
     .collect()
 }
 
-/// Whether `found` can be read as the column type `expected`: equal, except that a list's item field may have any
-/// name and nullability (pyarrow names it `element` when it rewrites a file; nulls are refused when decoding).
+/// Whether `found` can be read as the column type `expected`: equal, except that a list of samples may be a list or
+/// a fixed-size list of any size (files written before `ir` was fixed-size hold a list), and its item field may
+/// have any name and nullability (pyarrow names it `element` when it rewrites a file; nulls are refused when
+/// decoding).
 pub(crate) fn compatible(expected: &DataType, found: &DataType) -> bool {
-    match (expected, found) {
-        (DataType::List(e), DataType::List(f)) => e.data_type() == f.data_type(),
-        _ => expected == found,
+    let items = |t: &DataType| match t {
+        DataType::List(f) | DataType::FixedSizeList(f, _) => Some(f.data_type().clone()),
+        _ => None,
+    };
+    match (items(expected), items(found)) {
+        (Some(e), Some(f)) => e == f,
+        (None, None) => expected == found,
+        _ => false,
     }
 }
 
@@ -234,7 +239,7 @@ mod tests {
 
     #[test]
     fn schema_has_the_documented_columns_and_units() {
-        let schema = arrow_schema();
+        let schema = arrow_schema(12);
         let names: Vec<_> = schema.fields().iter().map(|f| f.name().as_str()).collect();
         assert_eq!(
             names,
@@ -253,10 +258,12 @@ mod tests {
 
     #[test]
     fn list_compatibility_ignores_item_name_only() {
-        let ours = DataType::List(Arc::new(ir_item_field()));
+        let ours = DataType::FixedSizeList(Arc::new(ir_item_field()), 12);
         let pyarrow = DataType::List(Arc::new(Field::new("element", DataType::Float32, true)));
+        let other_size = DataType::FixedSizeList(Arc::new(ir_item_field()), 7);
         let wrong = DataType::List(Arc::new(Field::new("item", DataType::Float64, false)));
         assert!(compatible(&ours, &pyarrow));
+        assert!(compatible(&ours, &other_size));
         assert!(!compatible(&ours, &wrong));
         assert!(!compatible(&DataType::UInt32, &DataType::UInt64));
     }

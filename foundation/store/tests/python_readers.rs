@@ -129,7 +129,7 @@ fn the_polars_lazy_frame_reads_the_committed_rows() {
     assert_eq!(frame.height(), 6);
     let schema = frame.schema();
     assert_eq!(schema.get("point_index"), Some(&DataType::UInt32));
-    assert_eq!(schema.get("ir"), Some(&DataType::List(Box::new(DataType::Float32))));
+    assert_eq!(schema.get("ir"), Some(&DataType::Array(Box::new(DataType::Float32), 50)));
     let one = Dataset::lazy(dir.path())
         .unwrap()
         .filter(col("point_index").eq(lit(6u32)).and(col("actuator").eq(lit(3u16))))
