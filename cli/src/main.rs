@@ -9,7 +9,9 @@ mod cache;
 mod calibrate;
 mod deconvolve;
 mod demo;
+mod export;
 mod focus;
+mod import;
 mod progress;
 mod replay;
 mod rig;
@@ -44,6 +46,11 @@ enum Command {
     Deconvolve(deconvolve::DeconvolveArgs),
     /// Drive signals that focus target waveforms on virtual pixels (multichannel WAV), from a dataset.
     Focus(focus::FocusArgs),
+    /// Export a dataset as a universal file (UFF 58 or 58b, with 164 units and 2411 nodes) for modal-analysis
+    /// tools, streamed with a progress bar.
+    Export(export::ExportArgs),
+    /// Build a dataset from universal files (58/58b responses, 2411 nodes, 164 units) that analyze and focus read.
+    Import(import::ImportArgs),
     /// Write an excitation sweep (the paper's by default) as a 32-bit float WAV file.
     Sweep(sweep::SweepArgs),
     /// List the built-in scenes, or show one (or a scene file) fully resolved.
@@ -75,6 +82,8 @@ fn main() -> anyhow::Result<()> {
         Command::Demo(args) => demo::run(&args),
         Command::Deconvolve(args) => deconvolve::run(&args),
         Command::Focus(args) => focus::run(&args),
+        Command::Export(args) => export::run(&args),
+        Command::Import(args) => import::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Replay(args) => replay::run(&args),

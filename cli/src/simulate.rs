@@ -8,7 +8,9 @@ use metaplate_analysis::dispersion::{DispersionOptions, SceneLayout, wavelengths
 use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
 use metaplate_plate::{GreensFunctions, GreensRequest, ModelOptions, PlateModel};
-use metaplate_store::{DatasetMeta, DatasetWriter, IfExists, IrMeta, IrRecord, Status};
+use metaplate_store::{
+    DatasetDescription, DatasetMeta, DatasetWriter, IR_UNIT_M_S_PER_N, IfExists, IrMeta, IrRecord, Status,
+};
 use serde_json::{Value, json};
 
 use crate::cache::CacheArgs;
@@ -235,7 +237,8 @@ pub fn write_ground_truth(
     });
     let Value::Object(config) = config else { bail!("internal: configuration is not a JSON object") };
     let meta =
-        DatasetMeta::new("simulate-greens", config, scene.id(), env!("CARGO_PKG_VERSION"), scene.seed, scene.grid);
+        DatasetMeta::new("simulate-greens", config, scene.id(), env!("CARGO_PKG_VERSION"), scene.seed, scene.grid)
+            .with_description(DatasetDescription { ir_unit: IR_UNIT_M_S_PER_N.into(), pre_samples: 0 });
     let if_exists = if force { IfExists::Replace } else { IfExists::Refuse };
     let mut writer = DatasetWriter::create(out, meta, if_exists)
         .with_context(|| format!("creating dataset {} (use --force to replace one)", out.display()))?;

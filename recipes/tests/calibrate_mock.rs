@@ -11,11 +11,11 @@ use common::{
     quick_config,
 };
 use metaplate_core::scene::Scene;
-use metaplate_recipes::calibrate::{ActuatorCalibration, VERIFY_IX, calibrate};
+use metaplate_recipes::calibrate::{ActuatorCalibration, calibrate, calibration_row};
 use metaplate_recipes::quality::smoothed_flatness;
 use metaplate_recipes::scan::scan;
 use metaplate_recipes::{Calibration, CalibrationConfig, RecipeError, RunControl, Silent};
-use metaplate_store::{Dataset, Status};
+use metaplate_store::{Dataset, RowKind, Status};
 
 /// Each actuator's magnet, m: where the calibration aims (the lab prepares these driving points).
 fn sites(scene: &Scene) -> Vec<(f64, f64)> {
@@ -45,7 +45,8 @@ fn every_actuator_calibrates_flat_within_1_db() {
     let cfg = config();
     let stored = Dataset::open(dir.path()).unwrap();
     for r in &results {
-        let verify: Vec<f64> = stored.ir(VERIFY_IX, r.actuator as u16).unwrap().iter().map(|v| f64::from(*v)).collect();
+        let row = calibration_row(&stored, RowKind::Verification, r.actuator as u16).unwrap();
+        let verify: Vec<f64> = stored.row_ir(row).unwrap().iter().map(|v| f64::from(*v)).collect();
         let fs = stored.sample_rate_hz();
         let flat = smoothed_flatness(&verify, fs, cfg.check_band_hz, cfg.smoothing_fraction).unwrap();
         assert!(flat.deviation_db() <= 1.0, "actuator {} stored verification: {flat:?}", r.actuator);

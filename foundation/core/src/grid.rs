@@ -35,6 +35,12 @@ pub enum GridError {
         /// The grid's points along y.
         ny: usize,
     },
+    /// Positions that do not lie on a regular grid (see [`snap_to_grid`]).
+    #[error("the positions do not form a regular grid: {reason}")]
+    NotRegular {
+        /// Why, naming a position where it helps.
+        reason: String,
+    },
     /// A grid-subset text (`NXxNY`) that could not be read, or asks for fewer points than its use needs.
     #[error("grid subset `{text}`: {reason}")]
     BadSubsetText {
@@ -249,6 +255,103 @@ fn spread(n: usize, n_sub: usize) -> Vec<usize> {
     (0..n_sub).map(|k| (((k as f64 + 0.5) * bin - 0.5).round() as usize).min(n - 1)).collect()
 }
 
+/// Distance within which two coordinates are the same and a position lies on a grid node in [`snap_to_grid`], m
+/// (1 µm: far below any scanning vibrometer's positioning, far above the rounding of coordinates written with 17
+/// digits).
+pub const SNAP_TOLERANCE_M: f64 = 1e-6;
+
+/// The regular grid that `positions_m` (x, y in m, from an untrusted file) lie on, and each position's flat index
+/// in it: the spacing is the largest step that every difference between distinct x and y coordinates is a whole
+/// multiple of (within [`SNAP_TOLERANCE_M`]), the origin is the smallest x and y, and the grid spans the positions.
+///
+/// # Errors
+/// [`GridError::NotRegular`] saying why: no position, a non-finite one, a single distinct position (no spacing),
+/// a spacing below a sixteenth of the smallest difference (positions that are not a grid, only noisy ones), two
+/// positions on one node, a grid of more than [`MAX_GRID_POINTS`].
+pub fn snap_to_grid(positions_m: &[(f64, f64)]) -> Result<(GridSpec, Vec<usize>), GridError> {
+    let refuse = |reason: String| Err(GridError::NotRegular { reason });
+    if positions_m.is_empty() {
+        return refuse("no position".into());
+    }
+    if let Some((i, p)) = positions_m.iter().enumerate().find(|(_, p)| !(p.0.is_finite() && p.1.is_finite())) {
+        return refuse(format!("position {i} is not finite: {p:?}"));
+    }
+    let tol = SNAP_TOLERANCE_M;
+    // Differences between neighbouring distinct coordinates, along both axes.
+    let mut gaps = Vec::new();
+    for axis in [0, 1] {
+        let mut values: Vec<f64> = positions_m.iter().map(|p| if axis == 0 { p.0 } else { p.1 }).collect();
+        values.sort_unstable_by(f64::total_cmp);
+        gaps.extend(values.windows(2).map(|w| w[1] - w[0]).filter(|&g| g > tol));
+    }
+    let Some(min_gap) = gaps.iter().copied().reduce(f64::min) else {
+        return refuse("all positions are one point: there is no spacing to find".into());
+    };
+    // Approximate greatest common divisor of the gaps (Euclid, remainders within the tolerance count as zero).
+    let mut spacing_m = min_gap;
+    for &gap in &gaps {
+        let (mut a, mut b) = (gap.max(spacing_m), gap.min(spacing_m));
+        while b > tol && a / b < 1e9 {
+            let r = a % b;
+            let r = if b - r <= tol { 0.0 } else { r };
+            (a, b) = (b, r);
+        }
+        spacing_m = a;
+        if spacing_m < min_gap / 16.0 {
+            return refuse(format!(
+                "the coordinates' differences have no common step of at least a sixteenth of the smallest one                  ({:.4} mm): they are not the nodes of a grid",
+                min_gap * 1e3
+            ));
+        }
+    }
+    let x0 = positions_m.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+    let y0 = positions_m.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    // The longest span over its number of steps: the spacing to the positions' own precision, not Euclid's.
+    let span_m = positions_m.iter().map(|p| (p.0 - x0).max(p.1 - y0)).fold(0.0, f64::max);
+    let span_steps = (span_m / spacing_m).round();
+    if span_steps >= 1.0 {
+        spacing_m = span_m / span_steps;
+    }
+    let steps = |v: f64, v0: f64| ((v - v0) / spacing_m).round();
+    let (mut nx, mut ny) = (1.0f64, 1.0f64);
+    for &(x, y) in positions_m {
+        nx = nx.max(steps(x, x0) + 1.0);
+        ny = ny.max(steps(y, y0) + 1.0);
+    }
+    if nx * ny > MAX_GRID_POINTS as f64 {
+        return refuse(format!(
+            "a {nx} x {ny} grid at {:.4} mm spacing exceeds the limit of {MAX_GRID_POINTS} points",
+            spacing_m * 1e3
+        ));
+    }
+    // Both at most MAX_GRID_POINTS (checked above), so the conversions are exact.
+    let grid = GridSpec { nx: nx as usize, ny: ny as usize, spacing_m, origin_x_m: x0, origin_y_m: y0 };
+    let mut taken = vec![usize::MAX; grid.len()];
+    let mut indices = Vec::with_capacity(positions_m.len());
+    for (i, &(x, y)) in positions_m.iter().enumerate() {
+        let (ix, iy) = (steps(x, x0), steps(y, y0));
+        let off_m = (x - x0 - ix * spacing_m).hypot(y - y0 - iy * spacing_m);
+        if off_m > tol.max(spacing_m * 1e-6) {
+            return refuse(format!(
+                "position {i} ({x} m, {y} m) lies {:.4} mm from the nearest node of the {} x {} grid at {:.4} mm",
+                off_m * 1e3,
+                grid.nx,
+                grid.ny,
+                spacing_m * 1e3
+            ));
+        }
+        let index = grid.index(ix as usize, iy as usize);
+        match taken.get_mut(index) {
+            Some(slot) if *slot == usize::MAX => *slot = i,
+            Some(slot) => return refuse(format!("positions {} and {i} lie on the same node ({x} m, {y} m)", *slot)),
+            None => return refuse(format!("position {i} falls outside the grid")),
+        }
+        indices.push(index);
+    }
+    grid.validate()?;
+    Ok((grid, indices))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -304,5 +407,70 @@ mod tests {
         let (x, y) = g.position_m(g.index(48, 24));
         assert!((x - 0.12).abs() < 1e-15 && (y - 0.06).abs() < 1e-15);
         assert_eq!(g.indices(g.index(17, 9)), (17, 9));
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
+mod snap_tests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    #[test]
+    fn a_subset_of_a_grid_snaps_to_its_common_step() {
+        let grid = GridSpec::centred(49, 25, 0.005);
+        let subset = grid.subset(7, 5).unwrap();
+        let positions: Vec<_> = subset.iter().map(|&i| grid.position_m(i)).collect();
+        let (snapped, indices) = snap_to_grid(&positions).unwrap();
+        assert!((snapped.spacing_m - 0.005).abs() < 1e-12, "{snapped:?}");
+        for (&i, &p) in indices.iter().zip(&positions) {
+            let q = snapped.position_m(i);
+            assert!((q.0 - p.0).abs() < 1e-9 && (q.1 - p.1).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn refuses_what_is_not_a_grid_with_the_reason() {
+        let reason = |p: &[(f64, f64)]| match snap_to_grid(p) {
+            Err(GridError::NotRegular { reason }) => reason,
+            other => panic!("{p:?}: {other:?}"),
+        };
+        assert!(reason(&[]).contains("no position"));
+        assert!(reason(&[(0.0, 0.0), (0.0, 0.0)]).contains("one point"));
+        assert!(reason(&[(0.0, 0.0), (f64::NAN, 0.0)]).contains("not finite"));
+        assert!(reason(&[(0.0, 0.0), (0.01, 0.0), (0.0173, 0.0)]).contains("sixteenth"));
+        assert!(reason(&[(0.0, 0.0), (1e-3, 0.0), (1e3, 1e3)]).contains("limit"));
+    }
+
+    proptest! {
+        /// Any positions: a grid with every position on its own node, or a typed refusal; never a panic.
+        #[test]
+        fn snapping_never_panics_and_places_every_position(
+            positions in prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 0..40),
+        ) {
+            if let Ok((grid, indices)) = snap_to_grid(&positions) {
+                prop_assert!(grid.validate().is_ok());
+                prop_assert_eq!(indices.len(), positions.len());
+                for (&i, &(x, y)) in indices.iter().zip(&positions) {
+                    let (gx, gy) = grid.position_m(i);
+                    prop_assert!((gx - x).abs() < 1e-5 && (gy - y).abs() < 1e-5);
+                }
+            }
+        }
+
+        /// Points of a regular grid, shuffled and thinned: snapped back onto nodes at the grid's spacing or a
+        /// multiple of it.
+        #[test]
+        fn grid_points_snap_back(
+            nx in 2usize..20, ny in 1usize..10, spacing_mm in 1u32..50, keep in prop::collection::vec(any::<bool>(), 200),
+        ) {
+            let grid = GridSpec::centred(nx, ny, f64::from(spacing_mm) * 1e-3);
+            let positions: Vec<_> =
+                (0..grid.len()).filter(|&i| keep[i % keep.len()] || i == 0 || i == 1).map(|i| grid.position_m(i)).collect();
+            let (snapped, _) = snap_to_grid(&positions).unwrap();
+            let ratio = snapped.spacing_m / grid.spacing_m;
+            prop_assert!((ratio - ratio.round()).abs() < 1e-6 && ratio >= 0.999, "{snapped:?}");
+        }
     }
 }

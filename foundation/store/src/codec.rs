@@ -7,7 +7,7 @@ use std::io::Write;
 use std::ops::Range;
 use std::sync::Arc;
 
-use arrow_array::builder::{Float32Builder, ListBuilder};
+use arrow_array::builder::{FixedSizeListBuilder, Float32Builder};
 use arrow_array::cast::AsArray;
 use arrow_array::types::{
     ArrowPrimitiveType, Float32Type, Float64Type, TimestampMicrosecondType, UInt16Type, UInt32Type,
@@ -20,19 +20,20 @@ use bytes::Bytes;
 use parquet::arrow::ArrowWriter;
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::basic::Compression;
+use parquet::file::metadata::KeyValue;
 use parquet::file::properties::{EnabledStatistics, WriterProperties};
 use parquet::schema::types::ColumnPath;
 
 use crate::error::StoreError;
 use crate::record::{IrMeta, IrRecord};
-use crate::schema::{self, Status, arrow_schema};
+use crate::schema::{self, RowKind, Status, arrow_schema};
 
 /// Writer settings: Snappy (pure Rust, read by every Parquet reader); no dictionaries, which only cost time on
 /// impulse responses (nearly every f32 distinct) and save nothing worth having on the small key columns; no
 /// statistics on the samples of `ir` (a page's min and max sample select nothing, and cost a pass over every
 /// sample); one row group per batch. Plain encoding: BYTE_STREAM_SPLIT made the files of noise-like responses 8%
 /// smaller with Snappy but decoded at two thirds of the speed. The reader assumes none of this.
-fn writer_properties() -> WriterProperties {
+fn writer_properties(key_values: Vec<KeyValue>) -> WriterProperties {
     // The Parquet path of the samples: Arrow writes a list as a repeated group `list` holding the item field.
     let ir_samples =
         ColumnPath::new(vec![schema::IR.to_string(), "list".to_string(), schema::ir_item_field().name().clone()]);
@@ -42,14 +43,18 @@ fn writer_properties() -> WriterProperties {
         .set_column_statistics_enabled(ir_samples, EnabledStatistics::None)
         .set_max_row_group_row_count(None)
         .set_max_row_group_bytes(None)
+        .set_key_value_metadata(Some(key_values))
         .build()
 }
 
-/// Assembles checked records into one Arrow record batch of the dataset schema.
+/// Assembles checked records (one IR length) into one Arrow record batch of the dataset schema.
 fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::ArrowError> {
     let metas = || records.iter().map(|r| &r.meta);
     let samples: usize = records.iter().map(|r| r.ir.len()).sum();
-    let mut ir = ListBuilder::with_capacity(Float32Builder::with_capacity(samples), records.len())
+    let ir_len = records.first().map_or(0, |r| r.ir.len());
+    let ir_len = i32::try_from(ir_len)
+        .map_err(|_| arrow_schema::ArrowError::InvalidArgumentError(format!("ir of {ir_len} samples")))?;
+    let mut ir = FixedSizeListBuilder::with_capacity(Float32Builder::with_capacity(samples), ir_len, records.len())
         .with_field(Arc::new(schema::ir_item_field()));
     for record in records {
         ir.values().append_slice(&record.ir);
@@ -71,16 +76,22 @@ fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::Ar
             TimestampMicrosecondArray::from_iter(metas().map(|m| m.measured_at_unix_us))
                 .with_timezone(schema::MEASURED_AT_TZ),
         ),
+        Arc::new(StringArray::from_iter(metas().map(|m| m.kind.map(RowKind::as_str)))),
     ];
-    RecordBatch::try_new(arrow_schema(), columns)
+    RecordBatch::try_new(arrow_schema(ir_len), columns)
 }
 
 /// Writes `records` as one Parquet file (one row group) to `sink`; `file` names it in errors.
 ///
 /// # Errors
 /// [`StoreError::Arrow`] or [`StoreError::Parquet`] (including I/O errors of `sink`, which Parquet wraps).
-pub(crate) fn write_parquet(sink: impl Write + Send, records: &[IrRecord], file: &str) -> Result<(), StoreError> {
-    write_parquet_parts(sink, std::iter::once(Ok(records)), file)
+pub(crate) fn write_parquet(
+    sink: impl Write + Send,
+    records: &[IrRecord],
+    key_values: Vec<KeyValue>,
+    file: &str,
+) -> Result<(), StoreError> {
+    write_parquet_parts(sink, std::iter::once(Ok(records)), key_values, file)
 }
 
 /// Writes the records of `parts` as one Parquet file, one row group per part, so that a large file (a compaction)
@@ -91,18 +102,47 @@ pub(crate) fn write_parquet(sink: impl Write + Send, records: &[IrRecord], file:
 pub(crate) fn write_parquet_parts<P: AsRef<[IrRecord]>>(
     sink: impl Write + Send,
     parts: impl IntoIterator<Item = Result<P, StoreError>>,
+    key_values: Vec<KeyValue>,
     file: &str,
 ) -> Result<(), StoreError> {
     let parquet = |source| StoreError::Parquet { file: file.to_string(), source };
-    let mut writer = ArrowWriter::try_new(sink, arrow_schema(), Some(writer_properties())).map_err(parquet)?;
+    // Opened with the first part: the schema's `ir` size is the parts' IR length.
+    let (mut sink, mut properties) = (Some(sink), Some(writer_properties(key_values)));
+    let mut writer = None;
     for part in parts {
         let batch =
             to_record_batch(part?.as_ref()).map_err(|source| StoreError::Arrow { file: file.to_string(), source })?;
+        let writer = match &mut writer {
+            Some(writer) => writer,
+            None => writer.insert(
+                ArrowWriter::try_new(
+                    sink.take().into_iter().next().ok_or_else(no_sink(file))?,
+                    batch.schema(),
+                    properties.take(),
+                )
+                .map_err(parquet)?,
+            ),
+        };
         writer.write(&batch).map_err(parquet)?;
         writer.flush().map_err(parquet)?;
     }
+    let writer = match (writer, sink) {
+        (Some(writer), _) => writer,
+        // No part: an empty file of the schema.
+        (None, Some(sink)) => ArrowWriter::try_new(sink, arrow_schema(0), properties).map_err(parquet)?,
+        (None, None) => return Err(no_sink(file)()),
+    };
     writer.close().map_err(parquet)?;
     Ok(())
+}
+
+/// The error of a sink used twice (not reachable: the writer takes it once).
+fn no_sink(file: &str) -> impl Fn() -> StoreError + '_ {
+    move || StoreError::Io {
+        op: "write",
+        path: file.into(),
+        source: std::io::Error::other("internal: the Parquet sink was already taken"),
+    }
 }
 
 /// The rows of one batch file: metadata per row, and the impulse responses back to back (row `r` spans
@@ -186,8 +226,10 @@ pub(crate) fn read_parquet_into(bytes: Bytes, file: &str, out: &mut Decoded) -> 
 /// Checks that every column of the dataset schema is present with a readable type (extra columns are ignored, so
 /// that a later schema version's additions do not break old readers of the same version).
 fn check_schema(found: &arrow_schema::Schema, file: &str) -> Result<(), StoreError> {
-    for expected in arrow_schema().fields() {
+    for expected in arrow_schema(1).fields() {
         let reason = match found.field_with_name(expected.name()) {
+            // Files written before the column existed.
+            Err(_) if expected.name() == schema::KIND => continue,
             Err(_) => format!("column {} is missing", expected.name()),
             Ok(f) if !schema::compatible(expected.data_type(), f.data_type()) => {
                 format!("column {} has type {}, expected {}", f.name(), f.data_type(), expected.data_type())
@@ -246,12 +288,24 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
         .column_by_name(schema::STATUS)
         .and_then(|c| c.as_string_opt::<i32>())
         .ok_or_else(|| mismatch("column status is missing or not utf8"))?;
-    let ir = batch
-        .column_by_name(schema::IR)
-        .and_then(|c| c.as_list_opt::<i32>())
-        .ok_or_else(|| mismatch("column ir is missing or not a list"))?;
-    let ir_values = ir.values().as_primitive_opt::<Float32Type>().ok_or_else(|| mismatch("ir items are not f32"))?;
-    let ir_offsets = ir.value_offsets();
+    let kind = match batch.column_by_name(schema::KIND) {
+        None => None,
+        Some(c) => Some(c.as_string_opt::<i32>().ok_or_else(|| mismatch("column kind is not utf8"))?),
+    };
+    let ir = batch.column_by_name(schema::IR).ok_or_else(|| mismatch("column ir is missing"))?;
+    // A fixed-size list (this version), or a list (files written before): the items and each row's offsets.
+    let fixed_offsets: Vec<i32>;
+    let (ir_items, ir_offsets): (&ArrayRef, &[i32]) = if let Some(list) = ir.as_list_opt::<i32>() {
+        (list.values(), list.value_offsets())
+    } else if let Some(list) = ir.as_fixed_size_list_opt() {
+        let len = list.value_length();
+        let rows = i32::try_from(list.len()).map_err(|_| mismatch("too many rows"))?;
+        fixed_offsets = (0..=rows).map(|r| r.saturating_mul(len)).collect();
+        (list.values(), &fixed_offsets)
+    } else {
+        return Err(mismatch("column ir is not a list"));
+    };
+    let ir_values = ir_items.as_primitive_opt::<Float32Type>().ok_or_else(|| mismatch("ir items are not f32"))?;
 
     let values = ir_values.values();
     // The samples of this batch's rows are copied in one go after the loop: `span` of the child array (a list array
@@ -268,6 +322,13 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
             let text = status.value(row);
             Some(Status::parse(text).ok_or_else(|| invalid(format!("unknown status {text:?}")))?)
         };
+        let kind = match kind {
+            Some(kind) if !kind.is_null(row) => {
+                let text = kind.value(row);
+                Some(RowKind::parse(text).ok_or_else(|| invalid(format!("unknown kind {text:?}")))?)
+            }
+            _ => None,
+        };
         out.metas.push(IrMeta {
             point_index: required(point_index, row, schema::POINT_INDEX, &location)?,
             ix: required(ix, row, schema::IX, &location)?,
@@ -280,6 +341,7 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
             status,
             retries: optional(retries, row),
             measured_at_unix_us: optional(measured_at, row),
+            kind,
         });
         if ir.is_null(row) {
             return Err(invalid("ir is null".into()));
@@ -322,6 +384,7 @@ mod tests {
         first.status = Some(Status::ReMeasured);
         first.retries = Some(2);
         first.measured_at_unix_us = Some(1_767_225_600_000_000);
+        first.kind = Some(RowKind::Verification);
         let second = IrMeta::at_grid(&grid, 0, 1, 0, 24_000.0).unwrap();
         vec![
             IrRecord { meta: first, ir: vec![1.5, -0.0, f32::MIN_POSITIVE / 2.0] },
@@ -333,7 +396,7 @@ mod tests {
     fn parquet_round_trip_is_bit_exact() {
         let records = records();
         let mut bytes = Vec::new();
-        write_parquet(&mut bytes, &records, "t.parquet").unwrap();
+        write_parquet(&mut bytes, &records, Vec::new(), "t.parquet").unwrap();
         let decoded = read_parquet(Bytes::from(bytes), "t.parquet").unwrap();
         let back: Vec<IrRecord> = decoded.rows().map(|(meta, ir)| IrRecord { meta: *meta, ir: ir.to_vec() }).collect();
         assert_eq!(back.len(), records.len());
@@ -355,6 +418,19 @@ mod tests {
         writer.close().unwrap();
         let err = read_parquet(Bytes::from(bytes), "t.parquet").unwrap_err();
         assert!(matches!(err, StoreError::SchemaMismatch { ref reason, .. } if reason.contains("ir")), "{err}");
+    }
+
+    #[test]
+    fn a_file_written_before_the_kind_column_reads_with_no_kind() {
+        let batch = to_record_batch(&records()).unwrap();
+        let without_kind = batch.project(&[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]).unwrap();
+        let mut bytes = Vec::new();
+        let mut writer = ArrowWriter::try_new(&mut bytes, without_kind.schema(), None).unwrap();
+        writer.write(&without_kind).unwrap();
+        writer.close().unwrap();
+        let decoded = read_parquet(Bytes::from(bytes), "t.parquet").unwrap();
+        assert!(decoded.metas.iter().all(|m| m.kind.is_none()));
+        assert_eq!(decoded.metas[0].status, Some(Status::ReMeasured));
     }
 
     /// Records of `rows` rows with `len`-sample responses, every sample distinct.
@@ -383,12 +459,12 @@ mod tests {
         // 90 rows of 40 000 samples: 14 MB, decoded some 6 rows at a time; into a `Decoded` that held another file.
         let records = many_records(90, 40_000);
         let mut bytes = Vec::new();
-        write_parquet(&mut bytes, &records, "t.parquet").unwrap();
+        write_parquet(&mut bytes, &records, Vec::new(), "t.parquet").unwrap();
         let mut decoded = read_parquet(Bytes::from(bytes.clone()), "t.parquet").unwrap();
         assert_decodes_to(bytes, &records);
         let small = self::records();
         let mut small_bytes = Vec::new();
-        write_parquet(&mut small_bytes, &small, "s.parquet").unwrap();
+        write_parquet(&mut small_bytes, &small, Vec::new(), "s.parquet").unwrap();
         read_parquet_into(Bytes::from(small_bytes), "s.parquet", &mut decoded).unwrap();
         assert_eq!(decoded.ir_offsets, [0, 3, 6]);
         assert_eq!(
@@ -412,16 +488,22 @@ mod tests {
         let batch = to_record_batch(&records).unwrap();
         let nullable_items = {
             let mut fields: Vec<arrow_schema::Field> =
-                arrow_schema().fields().iter().map(|f| f.as_ref().clone()).collect();
+                batch.schema().fields().iter().map(|f| f.as_ref().clone()).collect();
             let element = Arc::new(arrow_schema::Field::new("element", arrow_schema::DataType::Float32, true));
             fields[7] = arrow_schema::Field::new(schema::IR, arrow_schema::DataType::List(Arc::clone(&element)), true);
-            let ir = batch.column(7).as_list::<i32>().clone();
-            let (_, offsets, values, nulls) = ir.into_parts();
+            // As files written before `ir` was fixed-size: a list.
+            let mut ir = arrow_array::builder::ListBuilder::new(Float32Builder::new()).with_field(Arc::clone(&element));
+            for record in &records {
+                ir.values().append_slice(&record.ir);
+                ir.append(true);
+            }
             let mut columns = batch.columns().to_vec();
-            columns[7] = Arc::new(arrow_array::ListArray::new(element, offsets, values, nulls));
+            columns[7] = Arc::new(ir.finish());
             RecordBatch::try_new(Arc::new(arrow_schema::Schema::new(fields)), columns).unwrap()
         };
-        for (batch, properties) in [(&batch, dictionary), (&batch, plain), (&nullable_items, writer_properties())] {
+        for (batch, properties) in
+            [(&batch, dictionary), (&batch, plain), (&nullable_items, writer_properties(Vec::new()))]
+        {
             let mut bytes = Vec::new();
             let mut writer = ArrowWriter::try_new(&mut bytes, batch.schema(), Some(properties)).unwrap();
             writer.write(batch).unwrap();

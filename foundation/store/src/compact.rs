@@ -16,6 +16,7 @@ use crate::journal::{self, BatchEntry, JOURNAL_FILE, JournalEntry, JournalWriter
 use crate::manifest::{BATCH_DIR, Manifest};
 use crate::reader::Dataset;
 use crate::record::IrRecord;
+use crate::schema;
 
 /// Rows per row group of a compacted file: bounds the memory of writing it (1024 rows of 12000 samples: 49 MB).
 const ROWS_PER_GROUP: usize = 1024;
@@ -74,8 +75,9 @@ pub fn compact(dir: impl AsRef<Path>) -> Result<CompactReport, StoreError> {
     });
     let batch_dir = dir.join(BATCH_DIR);
     let budget = WriteBudget::default();
+    let key_values = schema::file_metadata(&manifest.meta, dataset.sample_rate_hz());
     let written = durable::write_file_into(dir, &batch_dir, &file, &budget, |sink| {
-        codec::write_parquet_parts(sink, parts, &file)
+        codec::write_parquet_parts(sink, parts, key_values, &file)
     })?;
     let superseded: Vec<String> = live.batches.iter().map(|b| b.file.clone()).collect();
     let entry = BatchEntry {

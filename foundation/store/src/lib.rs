@@ -39,10 +39,13 @@ pub use checksum::sha256;
 pub use compact::{CompactReport, compact};
 pub use error::StoreError;
 pub use journal::{JOURNAL_FILE, JournalIssue};
-pub use manifest::{BATCH_DIR, BatchInfo, DatasetMeta, GridSpec, MANIFEST_FILE, Manifest, SCHEMA_VERSION, SceneId};
-pub use reader::{Dataset, ReadOptions};
+pub use manifest::{
+    BATCH_DIR, BatchInfo, DatasetDescription, DatasetMeta, GridSpec, IR_UNIT_M_S_PER_N, MANIFEST_FILE, Manifest,
+    SCHEMA_VERSION, SceneId,
+};
+pub use reader::{BatchRows, Dataset, ReadOptions};
 pub use record::{IrMeta, IrRecord};
 pub use resume::{Quarantined, ResumeReport};
-pub use schema::Status;
+pub use schema::{RowKind, Status};
 pub use wav::{export_wav, read_wav, write_wav_f32};
 pub use writer::{DatasetWriter, IfExists, QUARANTINE_DIR};

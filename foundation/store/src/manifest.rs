@@ -45,6 +45,25 @@ pub struct DatasetMeta {
     pub seed: u64,
     /// The measurement grid.
     pub grid: GridSpec,
+    /// What the `ir` column holds (its unit, the samples before time 0), written into every batch file's key-value
+    /// metadata too; `None` for datasets written before it existed (absent from their manifest, so their
+    /// `config_hash` is unchanged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<DatasetDescription>,
+}
+
+/// [`DatasetDescription::ir_unit`] of plate velocity per actuator force: the simulated ground truth, and imports.
+pub const IR_UNIT_M_S_PER_N: &str = "m/s/N";
+
+/// What the `ir` column of a dataset holds, stated so that a batch file read alone says it
+/// ([`crate::schema::file_metadata`]).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DatasetDescription {
+    /// Unit of the `ir` samples, as text: `"m/s/N"` (plate velocity per actuator force: ground truth, imports),
+    /// `"m/s per full-scale drive"` (a scan), or a sentence where it depends on the row (a calibration).
+    pub ir_unit: String,
+    /// Samples of every `ir` before time 0 (time 0 at index `pre_samples`; 0: causal).
+    pub pre_samples: u32,
 }
 
 impl DatasetMeta {
@@ -65,7 +84,15 @@ impl DatasetMeta {
             software_version: software_version.into(),
             seed,
             grid,
+            description: None,
         }
+    }
+
+    /// This metadata with `description` ([`DatasetMeta::description`]).
+    #[must_use]
+    pub fn with_description(mut self, description: DatasetDescription) -> Self {
+        self.description = Some(description);
+        self
     }
 
     /// Checks that the metadata can be written: current schema version, non-empty recipe, valid grid.

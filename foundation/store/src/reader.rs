@@ -1,5 +1,6 @@
 //! Reading a finished dataset into memory, every file verified against its checksum first.
 
+use std::collections::BTreeSet;
 use std::fs::File;
 use std::io::Read;
 use std::num::NonZeroUsize;
@@ -92,58 +93,22 @@ impl Dataset {
 
     /// [`Dataset::open_with`] on at most `threads` threads (1: all on the calling thread).
     fn open_on(dir: &Path, options: ReadOptions, threads: usize) -> Result<Self, StoreError> {
-        let mut manifest = Manifest::read(dir)?;
-        let mut notes = Vec::new();
-        // Each file with the keys its journal entry lists (none for a manifest-only dataset).
-        type Keys = Option<Vec<(u32, u16)>>;
-        let batches: Vec<(BatchInfo, Keys)> = match journal::read(dir)? {
-            Some(read) => {
-                let live = Live::replay(&read.entries);
-                for issue in read.issues.iter().chain(&live.issues) {
-                    notes.push(format!("{JOURNAL_FILE} line {} ignored: {}", issue.line, issue.reason));
-                }
-                manifest.batches = live.batches.iter().map(BatchEntry::info).collect();
-                live.batches.into_iter().map(|b| (b.info(), Some(b.keys))).collect()
-            }
-            None => manifest.batches.iter().map(|b| (b.clone(), None)).collect(),
-        };
-        if batches.is_empty() {
-            return Err(StoreError::EmptyDataset { dir: dir.to_path_buf() });
-        }
-        let files: Vec<&BatchInfo> = batches.iter().map(|(info, _)| info).collect();
-        let total_rows = batches.iter().map(|(info, _)| info.rows).fold(0, u64::saturating_add);
-        let mut index = RowIndex::default();
         let mut metas = Vec::new();
         let mut irs = Vec::new();
-        for_each_file(dir, &files, options.verify_checksums, threads, |i, decoded| {
-            let Some((batch, keys)) = batches.get(i) else { return Ok(()) };
-            if decoded.metas.len() as u64 != batch.rows {
-                return Err(StoreError::RowCountMismatch {
-                    file: batch.file.clone(),
-                    expected: batch.rows,
-                    actual: decoded.metas.len() as u64,
-                });
-            }
-            if let Some(keys) = keys
-                && let Some(row) = decoded.metas.iter().zip(keys).position(|(m, k)| m.key() != *k)
-            {
-                let reason = format!("row {row} is {:?}, the journal says {:?}", decoded.metas[row].key(), keys[row]);
-                return Err(StoreError::KeysMismatch { file: batch.file.clone(), reason });
-            }
-            let checked = index.check(&batch.file, &manifest.meta.grid, decoded.rows())?;
+        let read = read_committed(dir, options, threads, |total_rows, ir_len, decoded| {
             if irs.is_empty() {
                 // Room for every row the journal lists, so that the 470 MB of a full dataset are not reallocated as
                 // they grow. Only a hint: the counts are not trusted, and a failed reservation just means growing.
                 let rows = usize::try_from(total_rows).unwrap_or(usize::MAX);
                 let _ = metas.try_reserve_exact(rows);
-                let _ = irs.try_reserve_exact(rows.saturating_mul(checked.ir_len()));
+                let _ = irs.try_reserve_exact(rows.saturating_mul(ir_len));
             }
-            index.accept(checked);
             metas.extend_from_slice(&decoded.metas);
-            // Every row has the dataset's IR length (checked above), so the values append back to back.
+            // Every row has the dataset's IR length (checked), so the values append back to back.
             irs.extend_from_slice(&decoded.ir_values);
             Ok(())
         })?;
+        let Committed { manifest, index, notes } = read;
         let (Some(ir_len), Some(sample_rate_hz)) = (index.ir_len(), index.sample_rate_hz()) else {
             return Err(StoreError::EmptyDataset { dir: dir.to_path_buf() });
         };
@@ -154,6 +119,46 @@ impl Dataset {
         actuators.sort_unstable();
         actuators.dedup();
         Ok(Self { manifest, metas, irs, ir_len, sample_rate_hz, index, points, actuators, notes })
+    }
+
+    /// Reads the dataset in `dir` one committed file at a time, without holding it whole: the same checks as
+    /// [`Dataset::open_with`] (the same files, in the same order), and each file's rows handed to `consume` as soon
+    /// as they are read and checked. Memory: a few decoded files at once (a compacted dataset is one file, read
+    /// whole). Returns the manifest, its batch list as the journal has it.
+    ///
+    /// # Errors
+    /// As [`Dataset::open_with`], or the first error of `consume` (no file after it is read).
+    pub fn stream<E: From<StoreError>>(
+        dir: impl AsRef<Path>,
+        options: ReadOptions,
+        mut consume: impl FnMut(BatchRows<'_>) -> Result<(), E>,
+    ) -> Result<Manifest, E> {
+        let threads = thread::available_parallelism().map_or(1, NonZeroUsize::get).min(MAX_THREADS);
+        let mut consumer_error = None;
+        let read = read_committed(dir.as_ref(), options, threads, |_, ir_len, decoded| {
+            let rows = BatchRows { rows: &decoded.metas, irs: &decoded.ir_values, ir_len };
+            consume(rows).map_err(|e| {
+                consumer_error = Some(e);
+                // Only stops the read: the consumer's own error is returned below.
+                StoreError::InvalidRecord { location: "stream".into(), reason: "stopped by its consumer".into() }
+            })
+        });
+        match (read, consumer_error) {
+            (_, Some(e)) => Err(e),
+            (Err(e), None) => Err(e.into()),
+            (Ok(read), None) => Ok(read.manifest),
+        }
+    }
+
+    /// The (point, actuator) keys the journal of the dataset in `dir` commits, sorted, read from the journal alone
+    /// (no batch file is opened or verified: a count for a progress bar, the points an exporter lists first);
+    /// `None` for a dataset written before the journal existed.
+    ///
+    /// # Errors
+    /// [`StoreError::Io`] if the journal exists but cannot be read.
+    pub fn committed_keys(dir: impl AsRef<Path>) -> Result<Option<BTreeSet<(u32, u16)>>, StoreError> {
+        Ok(journal::read(dir.as_ref())?
+            .map(|read| Live::replay(&read.entries).batches.iter().flat_map(|b| b.keys.iter().copied()).collect()))
     }
 
     /// What the reader skipped and why (journal lines torn by a crash or damaged); empty for a clean dataset.
@@ -238,6 +243,84 @@ impl Dataset {
     pub fn meta(&self, point_index: u32, actuator: u16) -> Option<&IrMeta> {
         self.metas.get(self.index.row(point_index, actuator)?)
     }
+}
+
+/// The rows of one committed file, as [`Dataset::stream`] hands them over.
+#[derive(Debug, Clone, Copy)]
+pub struct BatchRows<'a> {
+    /// Metadata of each row, in file order.
+    pub rows: &'a [IrMeta],
+    /// Their impulse responses back to back (row `r` at `r * ir_len..(r + 1) * ir_len`).
+    pub irs: &'a [f32],
+    /// Length of every impulse response of the dataset, samples.
+    pub ir_len: usize,
+}
+
+impl<'a> BatchRows<'a> {
+    /// Each row with its impulse response.
+    pub fn iter(&self) -> impl Iterator<Item = (&'a IrMeta, &'a [f32])> + use<'a> {
+        let ir_len = self.ir_len.max(1);
+        self.rows.iter().zip(self.irs.chunks_exact(ir_len))
+    }
+}
+
+/// What [`read_committed`] read besides the rows.
+struct Committed {
+    manifest: Manifest,
+    index: RowIndex,
+    notes: Vec<String>,
+}
+
+/// Reads the committed files of the dataset in `dir` (see [`Dataset::open_with`]) and hands each file's rows,
+/// checked, to `consume` with the total row count the journal lists (a hint) and the dataset's IR length.
+fn read_committed(
+    dir: &Path,
+    options: ReadOptions,
+    threads: usize,
+    mut consume: impl FnMut(u64, usize, &Decoded) -> Result<(), StoreError>,
+) -> Result<Committed, StoreError> {
+    let mut manifest = Manifest::read(dir)?;
+    let mut notes = Vec::new();
+    // Each file with the keys its journal entry lists (none for a manifest-only dataset).
+    type Keys = Option<Vec<(u32, u16)>>;
+    let batches: Vec<(BatchInfo, Keys)> = match journal::read(dir)? {
+        Some(read) => {
+            let live = Live::replay(&read.entries);
+            for issue in read.issues.iter().chain(&live.issues) {
+                notes.push(format!("{JOURNAL_FILE} line {} ignored: {}", issue.line, issue.reason));
+            }
+            manifest.batches = live.batches.iter().map(BatchEntry::info).collect();
+            live.batches.into_iter().map(|b| (b.info(), Some(b.keys))).collect()
+        }
+        None => manifest.batches.iter().map(|b| (b.clone(), None)).collect(),
+    };
+    if batches.is_empty() {
+        return Err(StoreError::EmptyDataset { dir: dir.to_path_buf() });
+    }
+    let files: Vec<&BatchInfo> = batches.iter().map(|(info, _)| info).collect();
+    let total_rows = batches.iter().map(|(info, _)| info.rows).fold(0, u64::saturating_add);
+    let mut index = RowIndex::default();
+    for_each_file(dir, &files, options.verify_checksums, threads, |i, decoded| {
+        let Some((batch, keys)) = batches.get(i) else { return Ok(()) };
+        if decoded.metas.len() as u64 != batch.rows {
+            return Err(StoreError::RowCountMismatch {
+                file: batch.file.clone(),
+                expected: batch.rows,
+                actual: decoded.metas.len() as u64,
+            });
+        }
+        if let Some(keys) = keys
+            && let Some(row) = decoded.metas.iter().zip(keys).position(|(m, k)| m.key() != *k)
+        {
+            let reason = format!("row {row} is {:?}, the journal says {:?}", decoded.metas[row].key(), keys[row]);
+            return Err(StoreError::KeysMismatch { file: batch.file.clone(), reason });
+        }
+        let checked = index.check(&batch.file, &manifest.meta.grid, decoded.rows())?;
+        let ir_len = checked.ir_len();
+        index.accept(checked);
+        consume(total_rows, ir_len, decoded)
+    })?;
+    Ok(Committed { manifest, index, notes })
 }
 
 /// Most threads [`Dataset::open_with`] reads and decodes files on: past a few, the disk is the limit.

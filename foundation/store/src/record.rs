@@ -2,7 +2,7 @@
 
 use crate::error::StoreError;
 use crate::manifest::GridSpec;
-use crate::schema::Status;
+use crate::schema::{RowKind, Status};
 
 /// Everything about one impulse response except its samples: which point and actuator, where, and how well it was
 /// measured. One row of a batch file, without the `ir` column.
@@ -30,6 +30,8 @@ pub struct IrMeta {
     pub retries: Option<u32>,
     /// Measurement time, µs since the Unix epoch (UTC); `None` when not measured (simulation).
     pub measured_at_unix_us: Option<i64>,
+    /// What a calibration row holds; `None` for the rows of a scan or a simulation.
+    pub kind: Option<RowKind>,
 }
 
 /// One impulse response with its metadata: what a recipe commits and the writer stores as one row.
@@ -65,6 +67,7 @@ impl IrMeta {
             status: None,
             retries: None,
             measured_at_unix_us: None,
+            kind: None,
         };
         meta.check(grid).map_err(invalid)?;
         Ok(meta)

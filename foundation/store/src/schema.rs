@@ -10,16 +10,27 @@
 //! | `x_m`, `y_m` | f64 | no | where the response was taken, m (plate coordinates) |
 //! | `actuator` | u16 | no | actuator number (audio interface channel, 0-based) |
 //! | `sample_rate_hz` | f64 | no | sample rate of `ir`, Hz; the same for every row of a dataset |
-//! | `ir` | list of f32 | no | impulse response, output per unit input (a scan: surface velocity in m/s per full-scale drive; the recipe in the manifest says) |
+//! | `ir` | fixed-size list of f32 (one size per dataset; files written before it existed hold a list) | no | impulse response, output per unit input (a scan: surface velocity in m/s per full-scale drive; the key-value metadata's `metaplate.ir_unit` and the manifest's `description` say) |
 //! | `snr_db` | f64 | yes | signal-to-noise ratio of the measurement, dB |
 //! | `status` | utf8 | yes | quality flag, one of [`Status`] |
 //! | `retries` | u32 | yes | how many times the point was re-measured |
 //! | `measured_at` | timestamp (µs, UTC) | yes | when the response was measured |
+//! | `kind` | utf8 | yes | what a row of a calibration dataset is, one of [`RowKind`] (`filter`, `response`, `verification`); null elsewhere. Optional when reading: files written before it existed lack the column |
+//!
+//! Every batch file also carries file-level key-value metadata ([`file_metadata`]), so that one file read alone says
+//! what it holds (polars and pyarrow keep these, where polars drops the fields' metadata): `metaplate.recipe`,
+//! `metaplate.scene` and `metaplate.scene_hash`, `metaplate.grid` (the grid as JSON: `nx`, `ny`, `spacing_m`,
+//! `origin_x_m`, `origin_y_m`), `metaplate.sample_rate_hz`, `metaplate.ir_unit` (`unstated` for a dataset without a
+//! [`DatasetDescription`]), `metaplate.pre_samples` (empty when unstated), `metaplate.software_version`,
+//! `metaplate.schema_version` and `metaplate.seed`.
 
 use std::collections::HashMap;
-use std::sync::{Arc, LazyLock};
+use std::sync::Arc;
 
 use arrow_schema::{DataType, Field, Schema, SchemaRef, TimeUnit};
+use parquet::file::metadata::KeyValue;
+
+use crate::manifest::{DatasetDescription, DatasetMeta};
 
 /// Column `point_index`: grid point index `iy * nx + ix` (u32).
 pub const POINT_INDEX: &str = "point_index";
@@ -45,6 +56,38 @@ pub const STATUS: &str = "status";
 pub const RETRIES: &str = "retries";
 /// Column `measured_at`: measurement time (timestamp in µs since the Unix epoch, UTC; nullable).
 pub const MEASURED_AT: &str = "measured_at";
+/// Column `kind`: what a calibration row is (utf8, nullable; see [`RowKind`]).
+pub const KIND: &str = "kind";
+
+/// What a row of a calibration dataset holds (column `kind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RowKind {
+    /// An inverse filter's taps.
+    Filter,
+    /// A measured response.
+    Response,
+    /// A verification response, measured through the filter.
+    Verification,
+}
+
+impl RowKind {
+    /// Every kind, in the order of the enum.
+    pub const ALL: [RowKind; 3] = [RowKind::Filter, RowKind::Response, RowKind::Verification];
+
+    /// The string stored in the `kind` column.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RowKind::Filter => "filter",
+            RowKind::Response => "response",
+            RowKind::Verification => "verification",
+        }
+    }
+
+    /// Parses a `kind` column string; `None` if it is not one of [`RowKind::as_str`]'s values.
+    pub fn parse(s: &str) -> Option<RowKind> {
+        RowKind::ALL.into_iter().find(|kind| kind.as_str() == s)
+    }
+}
 
 /// Name of the list items of the `ir` column (Arrow's default for a list).
 const IR_ITEM: &str = "item";
@@ -106,7 +149,10 @@ pub(crate) fn ir_item_field() -> Field {
 /// Time zone of the `measured_at` column.
 pub(crate) const MEASURED_AT_TZ: &str = "UTC";
 
-static SCHEMA: LazyLock<SchemaRef> = LazyLock::new(|| {
+/// The Arrow schema of a batch file whose responses are `ir_len` samples long (see the module documentation for
+/// each column's meaning and unit): `ir` is a fixed-size list, which polars reads as an Array and NumPy as a 2-D
+/// array without copies.
+pub fn arrow_schema(ir_len: i32) -> SchemaRef {
     Arc::new(Schema::new(vec![
         field(POINT_INDEX, DataType::UInt32, false, None),
         field(IX, DataType::UInt32, false, None),
@@ -115,26 +161,61 @@ static SCHEMA: LazyLock<SchemaRef> = LazyLock::new(|| {
         field(Y_M, DataType::Float64, false, Some("m")),
         field(ACTUATOR, DataType::UInt16, false, None),
         field(SAMPLE_RATE_HZ, DataType::Float64, false, Some("Hz")),
-        // No unit: it depends on the recipe (the manifest's configuration says what drives and what is measured).
-        field(IR, DataType::List(Arc::new(ir_item_field())), false, None),
+        // No field unit: the file's key-value metadata states it (`metaplate.ir_unit`).
+        field(IR, DataType::FixedSizeList(Arc::new(ir_item_field()), ir_len), false, None),
         field(SNR_DB, DataType::Float64, true, Some("dB")),
         field(STATUS, DataType::Utf8, true, None),
         field(RETRIES, DataType::UInt32, true, None),
         field(MEASURED_AT, DataType::Timestamp(TimeUnit::Microsecond, Some(MEASURED_AT_TZ.into())), true, None),
+        field(KIND, DataType::Utf8, true, None),
     ]))
-});
-
-/// The Arrow schema of every batch file (see the module documentation for each column's meaning and unit).
-pub fn arrow_schema() -> SchemaRef {
-    Arc::clone(&SCHEMA)
 }
 
-/// Whether `found` can be read as the column type `expected`: equal, except that a list's item field may have any
-/// name and nullability (pyarrow names it `element` when it rewrites a file; nulls are refused when decoding).
+/// Prefix of every key of the file-level key-value metadata this crate writes.
+pub const FILE_METADATA_PREFIX: &str = "metaplate.";
+
+/// The file-level key-value metadata of a batch file of the dataset `meta` whose responses are sampled at
+/// `sample_rate_hz` (keys in the module documentation).
+pub fn file_metadata(meta: &DatasetMeta, sample_rate_hz: f64) -> Vec<KeyValue> {
+    let grid = &meta.grid;
+    let grid_json = serde_json::json!({
+        "nx": grid.nx, "ny": grid.ny, "spacing_m": grid.spacing_m,
+        "origin_x_m": grid.origin_x_m, "origin_y_m": grid.origin_y_m,
+    });
+    let (ir_unit, pre_samples) = match &meta.description {
+        Some(DatasetDescription { ir_unit, pre_samples }) => (ir_unit.clone(), pre_samples.to_string()),
+        None => ("unstated".to_owned(), String::new()),
+    };
+    [
+        ("recipe", meta.recipe.clone()),
+        ("scene", meta.scene.name.clone()),
+        ("scene_hash", meta.scene.hash.clone()),
+        ("grid", grid_json.to_string()),
+        ("sample_rate_hz", sample_rate_hz.to_string()),
+        ("ir_unit", ir_unit),
+        ("pre_samples", pre_samples),
+        ("software_version", meta.software_version.clone()),
+        ("schema_version", meta.schema_version.to_string()),
+        ("seed", meta.seed.to_string()),
+    ]
+    .into_iter()
+    .map(|(key, value)| KeyValue::new(format!("{FILE_METADATA_PREFIX}{key}"), value))
+    .collect()
+}
+
+/// Whether `found` can be read as the column type `expected`: equal, except that a list of samples may be a list or
+/// a fixed-size list of any size (files written before `ir` was fixed-size hold a list), and its item field may
+/// have any name and nullability (pyarrow names it `element` when it rewrites a file; nulls are refused when
+/// decoding).
 pub(crate) fn compatible(expected: &DataType, found: &DataType) -> bool {
-    match (expected, found) {
-        (DataType::List(e), DataType::List(f)) => e.data_type() == f.data_type(),
-        _ => expected == found,
+    let items = |t: &DataType| match t {
+        DataType::List(f) | DataType::FixedSizeList(f, _) => Some(f.data_type().clone()),
+        _ => None,
+    };
+    match (items(expected), items(found)) {
+        (Some(e), Some(f)) => e == f,
+        (None, None) => expected == found,
+        _ => false,
     }
 }
 
@@ -158,11 +239,11 @@ mod tests {
 
     #[test]
     fn schema_has_the_documented_columns_and_units() {
-        let schema = arrow_schema();
+        let schema = arrow_schema(12);
         let names: Vec<_> = schema.fields().iter().map(|f| f.name().as_str()).collect();
         assert_eq!(
             names,
-            [POINT_INDEX, IX, IY, X_M, Y_M, ACTUATOR, SAMPLE_RATE_HZ, IR, SNR_DB, STATUS, RETRIES, MEASURED_AT]
+            [POINT_INDEX, IX, IY, X_M, Y_M, ACTUATOR, SAMPLE_RATE_HZ, IR, SNR_DB, STATUS, RETRIES, MEASURED_AT, KIND]
         );
         let unit = |name: &str| schema.field_with_name(name).ok().and_then(|f| f.metadata().get("unit").cloned());
         assert_eq!(unit(X_M).as_deref(), Some("m"));
@@ -170,17 +251,19 @@ mod tests {
         assert_eq!(unit(SNR_DB).as_deref(), Some("dB"));
         // Keys and the response itself are required; the quality columns are filled only by scans.
         for f in schema.fields() {
-            let optional = [SNR_DB, STATUS, RETRIES, MEASURED_AT].contains(&f.name().as_str());
+            let optional = [SNR_DB, STATUS, RETRIES, MEASURED_AT, KIND].contains(&f.name().as_str());
             assert_eq!(f.is_nullable(), optional, "{}", f.name());
         }
     }
 
     #[test]
     fn list_compatibility_ignores_item_name_only() {
-        let ours = DataType::List(Arc::new(ir_item_field()));
+        let ours = DataType::FixedSizeList(Arc::new(ir_item_field()), 12);
         let pyarrow = DataType::List(Arc::new(Field::new("element", DataType::Float32, true)));
+        let other_size = DataType::FixedSizeList(Arc::new(ir_item_field()), 7);
         let wrong = DataType::List(Arc::new(Field::new("item", DataType::Float64, false)));
         assert!(compatible(&ours, &pyarrow));
+        assert!(compatible(&ours, &other_size));
         assert!(!compatible(&ours, &wrong));
         assert!(!compatible(&DataType::UInt32, &DataType::UInt64));
     }

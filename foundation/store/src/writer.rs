@@ -14,6 +14,7 @@ use crate::index::RowIndex;
 use crate::journal::{BatchEntry, JOURNAL_FILE, JournalEntry, JournalWriter};
 use crate::manifest::{BATCH_DIR, BatchInfo, DatasetMeta, MANIFEST_FILE, Manifest};
 use crate::record::IrRecord;
+use crate::schema;
 
 /// Subdirectory of a dataset directory where `DatasetWriter::resume` moves files it cannot trust, with a note each
 /// in `notes.jsonl`.
@@ -143,9 +144,10 @@ impl DatasetWriter {
         let rows = records.iter().map(|r| (&r.meta, r.ir.as_slice()));
         let checked = self.index.check(&file, &self.manifest.meta.grid, rows)?;
         let batch_dir = self.dir.join(BATCH_DIR);
+        let key_values = schema::file_metadata(&self.manifest.meta, checked.sample_rate_hz());
         // Staged in the dataset directory, so that `batches/` only ever holds finished files.
         let written = durable::write_file_into(&self.dir, &batch_dir, &file, &self.budget, |sink| {
-            codec::write_parquet(sink, records, &file)
+            codec::write_parquet(sink, records, key_values, &file)
         })?;
         let entry = BatchEntry {
             file,

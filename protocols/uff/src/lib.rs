@@ -102,3 +102,37 @@ pub use model::{
     OtherDataset, UffRecord, Units164,
 };
 pub use num_complex::Complex64;
+
+/// The sample rate, Hz, of an even abscissa of step `step_s` seconds as a universal file writes it (6 significant
+/// digits, a relative error of at most 5 × 10⁻⁶): `1 / step_s` rounded to the nearest whole hertz when that lies
+/// within 10⁻⁵ (twice the writing's error) of it, else `1 / step_s` as read. Every rate a DAQ or an audio
+/// interface runs at is a whole number of hertz, so 24 kHz written `4.16667e-05` reads back as 24000 Hz exactly
+/// and 48 kHz (`2.08333e-05`, 48000.08 Hz) as 48000. `None` for a step that is not finite and positive.
+pub fn sample_rate_from_step(step_s: f64) -> Option<f64> {
+    if !(step_s.is_finite() && step_s > 0.0) {
+        return None;
+    }
+    let raw_hz = 1.0 / step_s;
+    let whole_hz = raw_hz.round();
+    let rate = if whole_hz >= 1.0 && (raw_hz - whole_hz).abs() <= 1e-5 * raw_hz { whole_hz } else { raw_hz };
+    rate.is_finite().then_some(rate)
+}
+
+#[cfg(test)]
+mod rate_tests {
+    use super::sample_rate_from_step;
+
+    #[test]
+    fn six_digit_steps_give_whole_rates_back() {
+        for rate in [8000.0, 24_000.0, 25_600.0, 44_100.0, 48_000.0, 51_200.0, 96_000.0, 192_000.0] {
+            let written: f64 = format!("{:.5e}", 1.0 / rate).parse().unwrap_or(f64::NAN);
+            assert_eq!(sample_rate_from_step(written), Some(rate), "{rate}");
+        }
+        assert_eq!(sample_rate_from_step(4.16667e-05), Some(24_000.0));
+        // Not near a whole number of hertz: kept as read.
+        assert_eq!(sample_rate_from_step(0.4), Some(2.5));
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(sample_rate_from_step(bad), None);
+        }
+    }
+}

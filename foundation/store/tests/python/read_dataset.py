@@ -3,7 +3,8 @@
 
 usage: read_dataset.py RUN_DIR EXPECTED.json
 
-EXPECTED.json: {"rows": N, "ir_len": L, "point_index": P, "actuator": A, "ir_head": [first samples of that IR]}.
+EXPECTED.json: {"rows": N, "ir_len": L, "point_index": P, "actuator": A, "ir_head": [first samples of that IR],
+"file_metadata": {key: value}} (every batch file's key-value metadata; "metaplate.grid" compared as JSON).
 The committed files are those the journal lists (journal.jsonl; each line's crc32 is zlib.crc32 of the line without
 its crc32 field); a compaction line supersedes the files it lists, a quarantine line removes its file. Exits nonzero,
 saying why, on any mismatch.
@@ -27,11 +28,12 @@ COLUMNS = {
     "y_m": (pl.Float64, pa.float64()),
     "actuator": (pl.UInt16, pa.uint16()),
     "sample_rate_hz": (pl.Float64, pa.float64()),
-    "ir": (pl.List(pl.Float32), None),
+    "ir": (None, None),  # a fixed-size list of f32, its size the dataset's IR length: checked below
     "snr_db": (pl.Float64, pa.float64()),
     "status": (pl.String, pa.string()),
     "retries": (pl.UInt32, pa.uint32()),
     "measured_at": (pl.Datetime("us", "UTC"), pa.timestamp("us", tz="UTC")),
+    "kind": (pl.String, pa.string()),
 }
 
 
@@ -65,6 +67,8 @@ def main() -> None:
     check(df.height == expected["rows"], f"polars rows {df.height} != {expected['rows']}")
     check(df.columns == list(COLUMNS), f"polars columns {df.columns}")
     for name, (pl_type, _) in COLUMNS.items():
+        if pl_type is None:
+            pl_type = pl.Array(pl.Float32, expected["ir_len"])
         check(df.schema[name] == pl_type, f"polars {name} is {df.schema[name]}, expected {pl_type}")
     row = df.filter((pl.col("point_index") == expected["point_index"]) & (pl.col("actuator") == expected["actuator"]))
     check(row.height == 1, f"polars: {row.height} rows for the expected key")
@@ -78,7 +82,12 @@ def main() -> None:
     for name, (_, pa_type) in COLUMNS.items():
         field = table.schema.field(name)
         if pa_type is None:
-            check(pa.types.is_list(field.type) and field.type.value_type == pa.float32(), f"pyarrow ir is {field.type}")
+            check(
+                pa.types.is_fixed_size_list(field.type)
+                and field.type.value_type == pa.float32()
+                and field.type.list_size == expected["ir_len"],
+                f"pyarrow ir is {field.type}",
+            )
         else:
             check(field.type == pa_type, f"pyarrow {name} is {field.type}, expected {pa_type}")
     check(table.schema.field("x_m").metadata.get(b"unit") == b"m", "pyarrow: x_m has no unit m")
@@ -86,6 +95,15 @@ def main() -> None:
     index = keys.index((expected["point_index"], expected["actuator"]))
     check(table["ir"][index].as_py()[: len(expected["ir_head"])] == expected["ir_head"], "pyarrow ir head")
     check(len(set(keys)) == len(keys), "duplicate (point, actuator) keys")
+    # NumPy: the fixed-size list is a 2-D array, rows x samples.
+    check(df["ir"].to_numpy().shape == (expected["rows"], expected["ir_len"]), "polars ir as NumPy is not 2-D")
+    for f in files:
+        found = {k.decode(): v.decode() for k, v in pq.read_metadata(f).metadata.items() if k.startswith(b"metaplate.")}
+        polars_found = {k: v for k, v in pl.read_parquet_metadata(f).items() if k.startswith("metaplate.")}
+        check(found == polars_found, f"{f.name}: polars and pyarrow disagree on the key-value metadata")
+        for key, value in expected["file_metadata"].items():
+            got = json.loads(found.get(key, "null")) if key == "metaplate.grid" else found.get(key)
+            check(got == value, f"{f.name}: {key} is {got!r}, expected {value!r}")
     print(f"ok: {len(files)} files, {df.height} rows, read by polars {pl.__version__} and pyarrow {pa.__version__}")
 
 

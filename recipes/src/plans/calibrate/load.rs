@@ -2,12 +2,12 @@
 
 use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_dsp::stats::median;
-use metaplate_store::{Dataset, Status};
+use metaplate_store::{Dataset, RowKind, Status};
 use serde_json::Value;
 
 use crate::error::RecipeError;
 use crate::plans::calibrate::processing::in_band_magnitudes;
-use crate::plans::calibrate::{FILTER_IX, RECIPE, RESPONSE_IX};
+use crate::plans::calibrate::{RECIPE, calibration_row};
 
 /// A calibration read back for a scan: one inverse filter per actuator and a hash that identifies it.
 #[derive(Debug, Clone, PartialEq)]
@@ -53,11 +53,15 @@ impl Calibration {
         let mut statuses = Vec::with_capacity(actuators);
         for a in 0..actuators {
             let key = a as u16;
-            let (Some(taps), Some(meta)) = (dataset.ir(FILTER_IX, key), dataset.meta(FILTER_IX, key)) else {
+            let filter_row = calibration_row(&dataset, RowKind::Filter, key);
+            let (Some(taps), Some(meta)) =
+                (filter_row.and_then(|r| dataset.row_ir(r)), filter_row.and_then(|r| dataset.rows().get(r)))
+            else {
                 return Err(bad(format!("actuator {a} is not calibrated (run calibrate again with --resume)")));
             };
             let taps: Vec<f64> = taps.iter().map(|v| f64::from(*v)).collect();
-            let max_boost_db = match dataset.ir(RESPONSE_IX, key) {
+            let response = calibration_row(&dataset, RowKind::Response, key).and_then(|r| dataset.row_ir(r));
+            let max_boost_db = match response {
                 Some(response) => boost_db(&taps, response, fs, band)?,
                 None => return Err(bad(format!("actuator {a}'s measured response is missing"))),
             };

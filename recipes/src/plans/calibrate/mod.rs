@@ -2,7 +2,8 @@
 //! inverse filter, and a verification measurement through the filter; one commit per actuator.
 //!
 //! The calibration dataset is a store dataset on a 3 x 1 "grid" whose columns are the three responses kept per
-//! actuator, each row at the magnet's position (x_m, y_m):
+//! actuator, each row at the magnet's position (x_m, y_m), its `kind` column saying what it is (readers go by
+//! `kind`, [`calibration_row`]; the grid column keeps the store's (point, actuator) keys distinct):
 //! - `ix = 0` ([`FILTER_IX`]): the Kirkeby filter taps (1 / (m/s per full scale), normalised so that the compensated
 //!   actuator's in-band gain is its uncompensated median gain);
 //! - `ix = 1` ([`RESPONSE_IX`]): the measured response, m/s per full scale, two-sided (`pre_samples` before time 0);
@@ -24,7 +25,7 @@ use metaplate_dsp::deconv::DeconvConfig;
 use metaplate_dsp::equalise::EqualiserConfig;
 use metaplate_dsp::kirkeby::{KirkebyConfig, KirkebyFilter};
 use metaplate_dsp::sweep::SweepSpec;
-use metaplate_store::{GridSpec, Status};
+use metaplate_store::{Dataset, GridSpec, RowKind, Status};
 use serde_json::{Map, Value, json};
 
 use crate::engine::acquire::RetryPolicy;
@@ -41,7 +42,7 @@ use plan::CalibrationPlan;
 
 /// Recipe name in the manifest.
 pub const RECIPE: &str = "calibrate";
-/// Grid column of the filter taps.
+/// Grid column of the filter taps (`kind` filter).
 pub const FILTER_IX: u32 = 0;
 /// Grid column of the measured response.
 pub const RESPONSE_IX: u32 = 1;
@@ -158,6 +159,26 @@ pub struct ActuatorCalibration {
     pub attempts: u32,
     /// `Valid` when flat within the limit, `Failed` otherwise.
     pub status: Status,
+}
+
+/// The grid column a calibration row of `kind` is written in.
+fn kind_ix(kind: RowKind) -> u32 {
+    match kind {
+        RowKind::Filter => FILTER_IX,
+        RowKind::Response => RESPONSE_IX,
+        RowKind::Verification => VERIFY_IX,
+    }
+}
+
+/// The row of the calibration dataset `dataset` that holds `kind` for `actuator`: by its `kind` column, or, in a
+/// calibration written before the column existed (no row has a kind), by the grid column it was written in.
+pub fn calibration_row(dataset: &Dataset, kind: RowKind, actuator: u16) -> Option<usize> {
+    let rows = dataset.rows();
+    let by_kind = rows.iter().position(|m| m.actuator == actuator && m.kind == Some(kind));
+    if by_kind.is_some() || rows.iter().any(|m| m.kind.is_some()) {
+        return by_kind;
+    }
+    rows.iter().position(|m| m.actuator == actuator && m.ix == kind_ix(kind))
 }
 
 /// Acquisitions per calibration measurement at most (the first included).

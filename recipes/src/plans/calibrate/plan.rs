@@ -7,7 +7,7 @@ use std::collections::{BTreeSet, VecDeque};
 use metaplate_dsp::deconv::DeconvConfig;
 use metaplate_dsp::equalise::EqualiserConfig;
 use metaplate_dsp::kirkeby::{KirkebyConfig, KirkebyFilter};
-use metaplate_store::{DatasetMeta, IrMeta, IrRecord, Status};
+use metaplate_store::{DatasetDescription, DatasetMeta, IrMeta, IrRecord, RowKind, Status};
 
 use crate::drive::{DrivePlayback, excitation};
 use crate::engine::acquire::{AcquisitionProblem, record_samples};
@@ -19,8 +19,7 @@ use crate::error::RecipeError;
 use crate::output::Output;
 use crate::plans::calibrate::processing::{CalibrationProcessor, Phase, Processed, Recorded};
 use crate::plans::calibrate::{
-    ActuatorCalibration, CALIBRATION_GRID, CalibrationConfig, FILTER_IX, MEASURE_ATTEMPTS, RECIPE, RESPONSE_IX,
-    VERIFY_IX,
+    ActuatorCalibration, CALIBRATION_GRID, CalibrationConfig, FILTER_IX, MEASURE_ATTEMPTS, RECIPE, kind_ix,
 };
 
 /// The actuator being calibrated.
@@ -80,17 +79,21 @@ impl<'a> CalibrationPlan<'a> {
         verification: &[f64],
     ) -> Result<Vec<IrRecord>, RecipeError> {
         let (x_m, y_m) = self.sites_m[calibration.actuator];
-        let rows: [(u32, &[f64]); 3] =
-            [(FILTER_IX, &calibration.filter.taps), (RESPONSE_IX, response), (VERIFY_IX, verification)];
+        let rows: [(RowKind, &[f64]); 3] = [
+            (RowKind::Filter, &calibration.filter.taps),
+            (RowKind::Response, response),
+            (RowKind::Verification, verification),
+        ];
         rows.iter()
-            .map(|(ix, ir)| {
+            .map(|(kind, ir)| {
                 let meta = IrMeta {
                     x_m,
                     y_m,
                     status: Some(calibration.status),
                     retries: Some(retries),
                     measured_at_unix_us: Some(now_unix_us()),
-                    ..IrMeta::at_grid(&CALIBRATION_GRID, *ix, 0, calibration.actuator as u16, self.fs)?
+                    kind: Some(*kind),
+                    ..IrMeta::at_grid(&CALIBRATION_GRID, kind_ix(*kind), 0, calibration.actuator as u16, self.fs)?
                 };
                 Ok(IrRecord { meta, ir: ir.iter().map(|v| *v as f32).collect() })
             })
@@ -111,6 +114,10 @@ impl Plan for CalibrationPlan<'_> {
             self.cfg.seed,
             CALIBRATION_GRID,
         )
+        .with_description(DatasetDescription {
+            ir_unit: "by kind: filter taps 1/(m/s per full scale); response and verification m/s per full scale".into(),
+            pre_samples: u32::try_from(self.cfg.deconv.pre_samples).unwrap_or(u32::MAX),
+        })
     }
 
     fn start(&mut self, committed: &BTreeSet<(u32, u16)>) -> (usize, usize) {
@@ -300,8 +307,11 @@ mod tests {
         };
         assert_eq!((unit, status), (1, Status::Valid));
         // Filter, response and verification, at the magnet, with no retry.
-        let columns: Vec<u32> = records.iter().map(|r| r.meta.ix).collect();
-        assert_eq!(columns, vec![FILTER_IX, RESPONSE_IX, VERIFY_IX]);
+        let kinds: Vec<_> = records.iter().map(|r| (r.meta.kind, r.meta.ix)).collect();
+        assert_eq!(
+            kinds,
+            vec![(Some(RowKind::Filter), 0), (Some(RowKind::Response), 1), (Some(RowKind::Verification), 2)]
+        );
         assert!(records.iter().all(|r| (r.meta.x_m, r.meta.y_m) == SITES[1] && r.meta.retries == Some(0)));
         assert_eq!(records[0].ir, vec![1.0, 0.5]);
         assert!(!plan.mid_unit());

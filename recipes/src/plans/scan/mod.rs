@@ -26,7 +26,7 @@ use metaplate_core::rig::Rig;
 use metaplate_dsp::deconv::DeconvConfig;
 use metaplate_dsp::excitation::{ExcitationProtocol, Scheme};
 use metaplate_dsp::stats::median;
-use metaplate_store::{DatasetMeta, Status};
+use metaplate_store::{DatasetDescription, DatasetMeta, Status};
 use serde_json::{Map, Value, json};
 
 use crate::drive::{AudioPlayback, excitation};
@@ -273,6 +273,13 @@ impl Plan for GridScan<'_> {
             self.cfg.seed,
             self.plan.grid,
         )
+        .with_description(DatasetDescription {
+            ir_unit: match self.calibration {
+                Some(_) => "m/s per full-scale drive, through the calibration's inverse filters".into(),
+                None => "m/s per full-scale drive".into(),
+            },
+            pre_samples: u32::try_from(self.cfg.protocol.deconv.pre_samples).unwrap_or(u32::MAX),
+        })
     }
 
     fn start(&mut self, committed: &BTreeSet<(u32, u16)>) -> (usize, usize) {
