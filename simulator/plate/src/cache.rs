@@ -65,11 +65,88 @@ pub fn greens_functions(
     {
         return Ok(hit);
     }
+    // Computed once across processes and threads: claim the entry, or wait for whoever holds the claim to store it.
+    let mut claim = None;
+    if let Some(path) = &path {
+        let key = cache_key(scene_hash, options, request);
+        loop {
+            if let Some(taken) = Claim::take(path)? {
+                claim = Some(taken);
+                break;
+            }
+            std::thread::sleep(CLAIM_POLL);
+            if let Some(hit) = load(path, key, request)? {
+                return Ok(hit);
+            }
+        }
+        // The holder may have stored the entry between the first look and the claim.
+        if let Some(hit) = load(path, key, request)? {
+            return Ok(hit);
+        }
+    }
     let greens = PlateModel::from_scene(scene, options)?.greens_functions(request)?;
     if let Some(path) = &path {
         store(path, cache_key(scene_hash, options, request), &greens)?;
     }
+    drop(claim);
     Ok(greens)
+}
+
+/// How often a request waiting for another computation of its entry looks for it.
+const CLAIM_POLL: std::time::Duration = std::time::Duration::from_millis(100);
+
+/// A claim on computing one entry: the file `<entry>.computing` holding the computing process's id, created
+/// exclusively and removed when the claim is dropped. Two tests, or two runs of the demo, that need the same Green's
+/// functions at once then compute them once: the others wait and load the entry. A claim whose process is gone (it
+/// was killed while computing) is stale and taken over. Liveness is read from `/proc`, so claims are made on Linux
+/// only; elsewhere every request computes for itself, as before (never waiting on a claim it cannot judge).
+struct Claim {
+    path: PathBuf,
+}
+
+impl Claim {
+    /// Claims `entry`: `Some` when this computation holds the claim (or claims are not made here), `None` while
+    /// another live computation holds it.
+    fn take(entry: &Path) -> Result<Option<Self>, PlateError> {
+        let path = entry.with_extension("computing");
+        if !cfg!(target_os = "linux") {
+            return Ok(Some(Self { path: PathBuf::new() }));
+        }
+        match fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+            Ok(mut file) => {
+                // Best effort: a claim without an id is judged live until its holder removes it.
+                let _ = write!(file, "{}", std::process::id());
+                Ok(Some(Self { path }))
+            }
+            Err(e) if e.kind() == ErrorKind::AlreadyExists => {
+                if claim_is_stale(&path) {
+                    // Taken over at the next look (another waiter may take it first: then this one waits again).
+                    let _ = fs::remove_file(&path);
+                }
+                Ok(None)
+            }
+            Err(e) => Err(cache_error(&path, e)),
+        }
+    }
+}
+
+impl Drop for Claim {
+    fn drop(&mut self) {
+        if !self.path.as_os_str().is_empty() {
+            let _ = fs::remove_file(&self.path);
+        }
+    }
+}
+
+/// Whether the claim file at `path` belongs to a process that no longer runs (its id has no `/proc` entry).
+fn claim_is_stale(path: &Path) -> bool {
+    let Ok(text) = fs::read_to_string(path) else {
+        return false;
+    };
+    match text.trim().parse::<u32>() {
+        Ok(pid) => !Path::new("/proc").join(pid.to_string()).exists(),
+        Err(_) => false,
+    }
 }
 
 /// Creates the cache directory (and its parents) when it does not exist.
@@ -218,6 +295,69 @@ mod tests {
         assert_eq!(load(&path, 2, &request).unwrap(), Some(greens));
         // Only the entry is left: every temporary name was renamed away.
         assert_eq!(fs::read_dir(&root).unwrap().count(), 1);
+        fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// A small request on the built-in homogeneous plate, its entry's path in `dir`, and a stand-in result that no
+    /// computation would give (every sample 0.25), to tell a loaded entry from a computed one.
+    fn entry(dir: &Path) -> (Scene, ModelOptions, GreensRequest, PathBuf, GreensFunctions) {
+        let scene = Scene::builtin("homogeneous").unwrap();
+        let options = ModelOptions::default();
+        let request = GreensRequest {
+            points: vec![612],
+            actuators: vec![0],
+            band_hz: (50.0, 600.0),
+            duration_s: 0.05,
+            sample_rate_hz: 24_000.0,
+        };
+        let hash = scene.content_hash();
+        let path = cache_path(dir, hash, cache_key(hash, &options, &request));
+        let ir_len = 1200;
+        let stand_in = GreensFunctions {
+            sample_rate_hz: 24_000.0,
+            ir_len,
+            points: vec![612],
+            actuators: vec![0],
+            data: vec![0.25; ir_len],
+        };
+        (scene, options, request, path, stand_in)
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_request_waits_for_a_live_claim_and_loads_what_its_holder_stores() {
+        let root = scratch("claim-live");
+        let (scene, options, request, path, stand_in) = entry(&root);
+        let claim = path.with_extension("computing");
+        // Held by a live process (this one), as another test's computation would hold it.
+        fs::write(&claim, std::process::id().to_string()).unwrap();
+        let key = cache_key(scene.content_hash(), &options, &request);
+        let got = std::thread::scope(|s| {
+            s.spawn(|| {
+                std::thread::sleep(std::time::Duration::from_millis(300));
+                store(&path, key, &stand_in).unwrap();
+                fs::remove_file(&claim).unwrap();
+            });
+            greens_functions(&scene, &options, &request, Some(&root)).unwrap()
+        });
+        assert_eq!(got, stand_in, "loaded the holder's entry rather than computing its own");
+        fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_claim_left_by_a_dead_process_is_taken_over_and_removed() {
+        let root = scratch("claim-stale");
+        let (scene, options, request, path, stand_in) = entry(&root);
+        let claim = path.with_extension("computing");
+        // A process id above the kernel's maximum (2^22) never runs.
+        fs::write(&claim, "4194305").unwrap();
+        let got = greens_functions(&scene, &options, &request, Some(&root)).unwrap();
+        assert_ne!(got, stand_in);
+        assert_eq!((got.points.clone(), got.actuators.clone()), (vec![612], vec![0]));
+        assert!(got.data.iter().any(|v| *v != 0.0), "computed");
+        // The entry is stored and the claim gone.
+        assert!(path.is_file() && !claim.exists());
         fs::remove_dir_all(&root).unwrap();
     }
 }
