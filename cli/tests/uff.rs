@@ -23,15 +23,17 @@ fn ok(args: &[&str]) -> Output {
     out
 }
 
+/// A fresh directory of this test process's own: under cargo-nextest every test is a process, so two tests'
+/// `original()` must not share (and replace) one directory.
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("uff-cli").join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("uff-cli").join(std::process::id().to_string()).join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
-/// The 13 x 7 metamaterial ground truth, simulated once per test run (its Green's functions cached under the
-/// target directory, as the other command tests do).
+/// The 13 x 7 metamaterial ground truth, simulated once per test process (its Green's functions cached under the
+/// target directory, as the other command tests do, so a second process loads them).
 fn original() -> &'static Path {
     static DATA: OnceLock<PathBuf> = OnceLock::new();
     DATA.get_or_init(|| {
