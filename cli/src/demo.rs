@@ -13,7 +13,8 @@
 //! 5. a 5-pixel pattern (5 distinct targets, one of them a null), solved on the scanned dataset, compensated by the
 //!    calibration's filters and peak-normalised, as `metaplate focus` renders it: `DIR/<plate>/pattern.wav`.
 //!
-//! It prints the paper-against-suite table (DESIGN.md section 6) and writes everything in `DIR/summary.json`.
+//! It prints the paper-against-suite table (DESIGN.md section 6), writes everything in `DIR/summary.json` and the
+//! same as one self-contained page in `DIR/report.html` (see `metaplate report`).
 //! Progress goes to stderr.
 
 use std::fs;
@@ -24,9 +25,7 @@ use clap::Args;
 use indicatif::ProgressBar;
 use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
-use metaplate_dsp::accuracy::ERROR_BAND_HZ;
 use metaplate_dsp::excitation::ExcitationProtocol;
-use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_plate::ModelOptions;
 use metaplate_recipes::calibrate::ActuatorCalibration;
@@ -39,7 +38,7 @@ use serde_json::{Value, json};
 
 use crate::cache::CacheArgs;
 use crate::focus::{PixelSpec, RenderOptions, render};
-use crate::{analyze, progress, simulate, wav};
+use crate::{analyze, paper_table, progress, report, simulate, truth, wav};
 
 /// Arguments of `metaplate demo`.
 #[derive(Args)]
@@ -59,9 +58,6 @@ pub struct DemoArgs {
     #[arg(long, hide = true, conflicts_with = "full")]
     grid: Option<String>,
 }
-
-/// Frequencies of the dispersion table, Hz: the paper's two measured points and the band between.
-const DISPERSION_FREQS_HZ: [f64; 6] = [75.0, 150.0, 250.0, 400.0, 500.0, 600.0];
 
 /// The default scan grid: every other point of the paper's 49 x 25 (1 cm spacing: 4 points per wavelength at
 /// 600 Hz; the 3.5 x 3.5 cm authority domain, centred on the lattice point at the plate centre, holds 3 x 3 points).
@@ -106,10 +102,13 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         "seed": args.seed,
         "wall_time_s": started.elapsed().as_secs_f64(),
     });
-    print_table(&summary);
+    paper_table::print(&summary);
     let path = args.out.join("summary.json");
     fs::write(&path, serde_json::to_string_pretty(&summary)?).with_context(|| format!("writing {}", path.display()))?;
+    let report_path = args.out.join("report.html");
+    report::write(&report_path, &summary)?;
     println!("\nwrote {} and the datasets, figures and patterns under {}", path.display(), args.out.display());
+    println!("the report (open it in a browser): {}", report_path.display());
     Ok(())
 }
 
@@ -124,7 +123,7 @@ fn run_plate(
 ) -> anyhow::Result<Value> {
     let name = scene.name.clone();
     let spinner = progress::spinner(format!("[{name}] dispersion of the plate model"));
-    let dispersion = simulate::dispersion(scene, &ModelOptions::default(), &DISPERSION_FREQS_HZ)?;
+    let dispersion = simulate::dispersion(scene, &ModelOptions::default(), &paper_table::DISPERSION_FREQS_HZ)?;
     spinner.finish_and_clear();
 
     let plan = ScanPlan::new(scene.grid, &scene.grid_mask(), subset)?;
@@ -165,7 +164,7 @@ fn run_plate(
 
     let spinner = progress::spinner(format!("[{name}] measured against true Green's functions"));
     let dataset = Dataset::open(&scan_dir).with_context(|| format!("opening {}", scan_dir.display()))?;
-    let errors = greens_errors(&lab, &dataset, &calibration.filters)?;
+    let errors = truth::greens_errors(&lab, &dataset, Some(&calibration.filters))?;
     spinner.finish_and_clear();
 
     let spinner = progress::spinner(format!("[{name}] analyses and figures"));
@@ -239,30 +238,6 @@ impl Observer for Progress {
     }
 }
 
-/// Per measured row (point, actuator): the error of the measured response against the lab's truth through the
-/// actuator's inverse filter ([`MockLab::response_error_db`] over [`ERROR_BAND_HZ`]), dB. Sorted ascending.
-fn greens_errors(lab: &MockLab, dataset: &Dataset, filters: &[KirkebyFilter]) -> anyhow::Result<Vec<f64>> {
-    let fs = dataset.sample_rate_hz();
-    let mut errors = Vec::with_capacity(dataset.len());
-    for &p in dataset.points() {
-        for &a in dataset.actuators() {
-            let Some(ir) = dataset.ir(p, a) else { continue };
-            let ir: Vec<f64> = ir.iter().map(|v| f64::from(*v)).collect();
-            let filter = filters.get(usize::from(a)).context("internal: no filter for an actuator")?;
-            errors.push(lab.response_error_db(p as usize, usize::from(a), &ir, fs, ERROR_BAND_HZ, Some(filter))?);
-        }
-    }
-    errors.retain(|e| e.is_finite());
-    errors.sort_by(f64::total_cmp);
-    Ok(errors)
-}
-
-/// The value at quantile `q` (0..=1) of sorted `values` (nearest rank), `None` when empty.
-fn quantile(sorted: &[f64], q: f64) -> Option<f64> {
-    let last = sorted.len().checked_sub(1)?;
-    sorted.get(((last as f64) * q).round() as usize).copied()
-}
-
 fn calibration_json(dir: &Path, calibrated: &[ActuatorCalibration]) -> Value {
     json!({
         "dir": dir.display().to_string(),
@@ -286,13 +261,7 @@ fn scan_json(dir: &Path, summary: &ScanSummary, wall_s: f64, errors: &[f64]) -> 
         "simulated_hours": summary.clock_s / 3600.0,
         "wall_s": wall_s,
         "speed_up": summary.clock_s / wall_s,
-        "greens_error_db": {
-            "band_hz": [ERROR_BAND_HZ.0, ERROR_BAND_HZ.1],
-            "rows": errors.len(),
-            "median": quantile(errors, 0.5),
-            "p95": quantile(errors, 0.95),
-            "worst": errors.last(),
-        },
+        "greens_error_db": truth::errors_json(errors),
     })
 }
 
@@ -338,94 +307,4 @@ fn render_pattern(dataset: &Dataset, calibration: &Path, wav_path: &Path) -> any
         "focus_s": rendered.focus_s,
         "pixels": pixels,
     }))
-}
-
-/// Prints the paper-against-suite table (DESIGN.md section 6) from the summary.
-fn print_table(summary: &Value) {
-    let plates = &summary["plates"];
-    let disp = |plate: &str, f: f64| {
-        plates[plate]["dispersion"]["points"]
-            .as_array()
-            .and_then(|ps| ps.iter().find(|p| p["freq_hz"].as_f64() == Some(f)))
-            .and_then(|p| p["wavelength_m"].as_f64())
-            .unwrap_or(f64::NAN)
-    };
-    let ratios: Vec<f64> =
-        DISPERSION_FREQS_HZ.iter().map(|&f| disp("homogeneous", f) / disp("metamaterial", f)).collect();
-    let (rmin, rmax) = ratios.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), &r| (a.min(r), b.max(r)));
-    let a = |plate: &str| &plates[plate]["analysis"];
-    let num = |v: &Value, digits: usize| v.as_f64().map_or_else(|| "-".to_owned(), |x| format!("{x:.digits$}"));
-    let pair = |key: &str, digits: usize| {
-        format!("{} / {}", num(&a("metamaterial")[key], digits), num(&a("homogeneous")[key], digits))
-    };
-    let keyed = |key: &str, edge: &str, digits: usize| {
-        format!("{} / {}", num(&a("metamaterial")[key][edge], digits), num(&a("homogeneous")[key][edge], digits))
-    };
-    let row = |q: &str, paper: &str, suite: String| println!("{q:<46} {paper:>30}   {suite}");
-    println!("\n{:<46} {:>30}   metaplate (metamaterial / homogeneous)", "quantity", "paper");
-    row(
-        "wavelength at 75 Hz, metamaterial (model)",
-        "11.3 cm",
-        format!("{:.1} cm", disp("metamaterial", 75.0) * 100.0),
-    );
-    row(
-        "wavelength at 600 Hz, metamaterial (model)",
-        "2.5 cm",
-        format!("{:.1} cm", disp("metamaterial", 600.0) * 100.0),
-    );
-    row("homogeneous / metamaterial wavelength", "2.1 to 4.8", format!("{rmin:.1} to {rmax:.1}"));
-    let area = |p: &str| a(p)["median_pixel_area_cm2"].as_f64();
-    let ratio = match (area("metamaterial"), area("homogeneous")) {
-        (Some(m), Some(h)) if m > 0.0 => format!(" ({:.1} x)", h / m),
-        _ => String::new(),
-    };
-    row("median virtual-pixel area, cm^2", "2.74 / about 10 x", format!("{}{ratio}", pair("median_pixel_area_cm2", 2)));
-    row("refresh, ms", "5 / -", pair("refresh_ms", 1));
-    row("POD components for 99 %", "23 / 11", pair("pod_components_99", 0));
-    // Authority depends on the lattice (how many points a domain holds): each side says its own, so that unlike
-    // is not read as like. The paper's domains hold 361, 169 and 49 points of its 5 mm grid.
-    let lattice = |key: &str, edge: &str| {
-        let spacing_cm = a("metamaterial")["lattice"]["spacing_m"].as_f64().map_or(f64::NAN, |h| h * 100.0);
-        format!("{} [{} pts, {spacing_cm:.1} cm]", keyed(key, edge, 1), a("metamaterial")["points_per_domain"][edge])
-    };
-    row("effective rank of G_D, d = 3.5 cm", "7.4 / 4.3 [49 pts, 0.5 cm]", lattice("effective_rank", "3.5"));
-    for (edge, paper) in [
-        ("9.5", "5.0 / 51.5 [361 pts, 0.5 cm]"),
-        ("6.5", "10.1 / 110.6 [169 pts, 0.5 cm]"),
-        ("3.5", "35.9 / 236.0 [49 pts, 0.5 cm]"),
-    ] {
-        row(&format!("mean condition number, d = {edge} cm"), paper, lattice("condition_number", edge));
-    }
-    let peak_mm_s = |p: &str| {
-        plates[p]["pattern"]["pixels"]
-            .as_array()
-            .map(|px| px.iter().filter_map(|x| x["peak_velocity_m_s"].as_f64()).fold(0.0_f64, f64::max) * 1e3)
-    };
-    let show = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |x| format!("{x:.1}"));
-    row(
-        "peak velocity at a pixel (full-scale drive), mm/s",
-        "> 10",
-        format!("{} / {}", show(peak_mm_s("metamaterial")), show(peak_mm_s("homogeneous"))),
-    );
-    println!("\nthe measurement (mock lab, {} protocol):", summary["protocol"].as_str().unwrap_or("?"));
-    for plate in ["metamaterial", "homogeneous"] {
-        let s = &plates[plate]["scan"];
-        let e = &s["greens_error_db"];
-        let statuses = s["statuses"]
-            .as_object()
-            .map_or_else(String::new, |m| m.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", "));
-        let calibrated = plates[plate]["calibration"]["actuators"]
-            .as_array()
-            .map_or(0, |a| a.iter().filter(|c| c["status"] == "valid").count());
-        println!(
-            "  {plate}: {calibrated}/8 actuators calibrated; {} points ({statuses}), {} h simulated in {} s; Green's \
-             functions against the truth: median {} dB, p95 {} dB; pattern peak drive {}",
-            s["points"],
-            num(&s["simulated_hours"], 2),
-            num(&s["wall_s"], 0),
-            num(&e["median"], 1),
-            num(&e["p95"], 1),
-            num(&plates[plate]["pattern"]["peak_drive"], 3),
-        );
-    }
 }

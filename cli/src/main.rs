@@ -12,8 +12,10 @@ mod demo;
 mod export;
 mod focus;
 mod import;
+mod paper_table;
 mod progress;
 mod replay;
+mod report;
 mod rig;
 mod run;
 mod scan;
@@ -21,6 +23,7 @@ mod scene;
 mod simulate;
 mod sweep;
 mod tradeoff;
+mod truth;
 mod wav;
 
 #[derive(Parser)]
@@ -51,6 +54,10 @@ enum Command {
     Export(export::ExportArgs),
     /// Build a dataset from universal files (58/58b responses, 2411 nodes, 164 units) that analyze and focus read.
     Import(import::ImportArgs),
+    /// One self-contained HTML report on scan datasets (one plate or the pair): the paper-against-suite table,
+    /// the figures, each measurement's summary with status and SNR maps, its error against the simulated truth,
+    /// and its provenance.
+    Report(report::ReportArgs),
     /// Write an excitation sweep (the paper's by default) as a 32-bit float WAV file.
     Sweep(sweep::SweepArgs),
     /// List the built-in scenes, or show one (or a scene file) fully resolved.
@@ -87,6 +94,7 @@ fn main() -> anyhow::Result<()> {
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Replay(args) => replay::run(&args),
+        Command::Report(args) => report::run(&args),
         Command::Tradeoff(args) => tradeoff::run(&args),
         Command::Simulate { command } => simulate::run(&command),
         Command::Calibrate(args) => calibrate::run(&args),

@@ -29,6 +29,7 @@ use metaplate_store::Dataset;
 use serde_json::{Value, json};
 
 use crate::cache::CacheArgs;
+use crate::truth;
 
 /// Protocols measured by default.
 const DEFAULT_PROTOCOLS: &str =
@@ -160,16 +161,14 @@ fn measure(
     let summary = scan(&mut rig, plan, None, &cfg, &out, &RunControl::new(), &mut Silent)
         .with_context(|| format!("scanning with {name}"))?;
     let dataset = Dataset::open(&dir)?;
-    let mut errors = Vec::new();
-    for &p in &plan.points {
-        for a in 0..actuators {
-            let ir = dataset.ir(p as u32, a as u16).with_context(|| format!("row ({p}, {a}) missing"))?;
-            let ir: Vec<f64> = ir.iter().map(|v| f64::from(*v)).collect();
-            errors.push(lab.response_error_db(p, a, &ir, dataset.sample_rate_hz(), ERROR_BAND_HZ, None)?);
-        }
+    let errors = truth::greens_errors(lab, &dataset, None)?;
+    if errors.len() != plan.points.len() * actuators {
+        bail!("{name}: {} of {} rows compare with the truth", errors.len(), plan.points.len() * actuators);
     }
-    errors.sort_by(f64::total_cmp);
-    let quantile = |q: f64| errors[((errors.len() - 1) as f64 * q).round() as usize];
+    let (Some(median_error_db), Some(p95_error_db)) = (truth::quantile(&errors, 0.5), truth::quantile(&errors, 0.95))
+    else {
+        bail!("{name}: no row to compare with the truth");
+    };
     let failed_rows = summary.statuses.get("failed").copied().unwrap_or(0);
     let pixel = median_pixel_area(&dataset, plan);
     let time_per_point_s = summary.clock_s / plan.points.len() as f64;
@@ -179,8 +178,8 @@ fn measure(
         time_per_point_s,
         nominal_time_per_point_s: nominal,
         scan_hours: time_per_point_s * full_points as f64 / 3600.0,
-        median_error_db: quantile(0.5),
-        p95_error_db: quantile(0.95),
+        median_error_db,
+        p95_error_db,
         median_pixel_area_cm2: pixel,
         failed_rows,
     })

@@ -1,5 +1,5 @@
 //! `metaplate demo` end to end on a small scan grid (the hidden `--grid`): calibration and scan on the mock lab for
-//! both plates, the analyses, the figures, the 5-pixel pattern and the summary.
+//! both plates, the analyses, the figures, the 5-pixel pattern, the summary and the report.
 
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
@@ -24,6 +24,24 @@ fn the_demo_calibrates_scans_analyses_and_renders_both_plates() {
     for row in ["wavelength at 75 Hz", "median virtual-pixel area", "POD components", "mean condition number"] {
         assert!(stdout.contains(row), "table row `{row}` missing:\n{stdout}");
     }
+    // The report: both plates, the table, each scan's error against the truth through its calibration (rendering
+    // is tested in report.rs).
+    assert!(stdout.contains(&out.join("report.html").display().to_string()), "the report's path is printed");
+    let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+    for part in ["Paper against suite", "Both plates", "Plate: metamaterial", "Plate: homogeneous"] {
+        assert!(page.contains(part), "report: `{part}` missing");
+    }
+    assert_eq!(page.matches("functions against the truth</th><td>median -").count(), 2, "both plates' errors");
+    // `metaplate report` on a calibrated scan without its calibration says why it cannot compare with the truth.
+    let html = out.join("metamaterial.html");
+    let scan = out.join("metamaterial").join("scan");
+    let run = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["report", scan.to_str().unwrap(), "--out", html.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("pass its --calibration DIR to compare with the truth"), "the reason is given");
 
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();

@@ -5,15 +5,18 @@
 //! system font, fontconfig or font-kit is ever consulted, so figures look the same on every machine and in CI.
 //!
 //! Each figure function takes plain data (no analysis types, so any source can plot) and writes `<name>.png` and
-//! `<name>.svg` into a directory, returning both paths.
+//! `<name>.svg` into a directory, returning both paths. The grid maps for pages (`status_map_svg`, `snr_map_svg`)
+//! return inline SVG instead.
 
 mod colour;
 mod glyphs;
+mod grid_svg;
 mod maps;
 mod plots;
 mod render;
 mod tradeoff;
 
+pub use grid_svg::{CellStatus, snr_map_svg, status_map_svg};
 pub use maps::{PlateOverlay, focus_snapshots, pixel_area_map};
 pub use plots::{
     Curve, SingularValueSeries, WavelengthReferences, WavelengthSeries, condition_numbers, driven_response, pod_energy,
