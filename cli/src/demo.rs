@@ -220,7 +220,7 @@ impl Progress {
 impl Observer for Progress {
     fn event(&mut self, event: &Event) {
         match event {
-            Event::Started { total, done } => {
+            Event::Started { total, done, .. } => {
                 let bar = progress::bar(*total as u64, &self.label);
                 bar.set_position(*done as u64);
                 self.bar = Some(bar);
@@ -233,7 +233,11 @@ impl Observer for Progress {
                 }
             }
             Event::Stopped { .. } | Event::Finished { .. } => self.finish(),
-            Event::Retry { .. } | Event::Recovered { .. } | Event::Paused { .. } | Event::ReferenceChecked { .. } => {}
+            Event::Retry { .. }
+            | Event::Recovered { .. }
+            | Event::Paused { .. }
+            | Event::ReferenceChecked { .. }
+            | Event::Phase { .. } => {}
         }
     }
 }

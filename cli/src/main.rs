@@ -82,9 +82,27 @@ enum Command {
     },
 }
 
-fn main() -> anyhow::Result<()> {
+/// Runs the command; a failure is printed as one message (its causes after colons, never a backtrace, whatever
+/// `RUST_BACKTRACE` says) and exits with 1. A `scan` or `calibrate` with `--json` prints a `failed` event first,
+/// so a script reading the events learns of it on the same channel.
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    match cli.command {
+    let json_recipe = match &cli.command {
+        Command::Scan(args) if args.run.json => Some("scan"),
+        Command::Calibrate(args) if args.run.json => Some("calibrate"),
+        _ => None,
+    };
+    let Err(error) = dispatch(cli.command) else { return std::process::ExitCode::SUCCESS };
+    let message = format!("{error:#}");
+    if let Some(recipe) = json_recipe {
+        println!("{}", serde_json::json!({"event": "failed", "recipe": recipe, "error": message}));
+    }
+    eprintln!("error: {message}");
+    std::process::ExitCode::FAILURE
+}
+
+fn dispatch(command: Command) -> anyhow::Result<()> {
+    match command {
         Command::Analyze(args) => analyze::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Deconvolve(args) => deconvolve::run(&args),

@@ -22,10 +22,11 @@ pub fn spinner(message: String) -> ProgressBar {
 }
 
 /// A bar for a measurement run of `len` units, `done` of them already committed (resume): `label` before the bar,
-/// and a message after it (rate, ETA on the rig's clock, SNR) that the caller keeps current.
+/// the wall time elapsed after it, and a message (what the run does, retries, remaining time, SNR) that the caller
+/// keeps current.
 pub fn run_bar(len: u64, done: u64, label: &str) -> ProgressBar {
     let bar = ProgressBar::new(len);
-    if let Ok(style) = ProgressStyle::with_template("{prefix:>10} [{bar:40}] {pos}/{len} {msg}") {
+    if let Ok(style) = ProgressStyle::with_template("{prefix:>10} [{bar:30}] {pos}/{len} {elapsed_precise} {msg}") {
         bar.set_style(style.progress_chars("=> "));
     }
     bar.set_prefix(label.to_string());

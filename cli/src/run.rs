@@ -10,7 +10,7 @@ use std::sync::Mutex;
 use anyhow::Context;
 use clap::Args;
 use indicatif::ProgressBar;
-use metaplate_recipes::{Event, Observer, Output, RecipeError, RunControl};
+use metaplate_recipes::{Event, Observer, Output, RecipeError, RemainingTime, RunControl};
 use metaplate_store::{MANIFEST_FILE, SceneId, StoreError};
 use serde_json::{Value, json};
 
@@ -173,6 +173,10 @@ enum Display {
 }
 
 /// The recipe's observer: logs every event, and shows progress as a bar or as JSON lines.
+///
+/// The bar ticks every second (elapsed wall time) and says what the run is doing: the unit and its phase (moving,
+/// playing which actuators, processing, committing), the retries so far, and the remaining time as a median and a
+/// conservative 90th percentile ([`RemainingTime`], on the rig's clock) with the wall-clock time it ends.
 pub struct Reporter {
     recipe: &'static str,
     unit: &'static str,
@@ -181,6 +185,20 @@ pub struct Reporter {
     done_at_start: usize,
     /// The bar, shared with the Ctrl-C handler.
     shared_bar: ProgressBar,
+    /// When this run started (wall clock).
+    started: std::time::Instant,
+    /// Rig-clock duration of each unit this run committed, s.
+    durations_s: Vec<f64>,
+    /// Rig clock at the last commit (or the start), s.
+    last_commit_clock_s: f64,
+    /// Retries and deferrals so far.
+    retries: usize,
+    /// What the run does now, as the bar shows it.
+    activity: String,
+    /// The last commit's part of the bar's message (SNR).
+    last_commit: String,
+    total: usize,
+    done: usize,
 }
 
 impl Reporter {
@@ -189,7 +207,21 @@ impl Reporter {
     pub fn new(recipe: &'static str, unit: &'static str, json: bool) -> Self {
         let shared_bar = progress::run_bar(0, 0, recipe);
         let display = if json { Display::Json } else { Display::Bar(None) };
-        Self { recipe, unit, display, done_at_start: 0, shared_bar }
+        Self {
+            recipe,
+            unit,
+            display,
+            done_at_start: 0,
+            shared_bar,
+            started: std::time::Instant::now(),
+            durations_s: Vec::new(),
+            last_commit_clock_s: 0.0,
+            retries: 0,
+            activity: String::new(),
+            last_commit: String::new(),
+            total: 0,
+            done: 0,
+        }
     }
 
     /// The bar (for the Ctrl-C handler's messages), when progress is shown as a bar.
@@ -207,12 +239,38 @@ impl Reporter {
         Some((per_hour, total.saturating_sub(done) as f64 / per_hour))
     }
 
+    /// The remaining time on the rig's clock, from the units this run committed.
+    fn remaining(&self) -> Option<RemainingTime> {
+        RemainingTime::estimate(&self.durations_s, self.total.saturating_sub(self.done))
+    }
+
+    /// Wall-clock seconds per rig-clock second so far (1 on real instruments, less on the fast-forward mock lab),
+    /// so that a remaining rig time becomes a time of day.
+    fn wall_per_rig_s(&self) -> Option<f64> {
+        let rig_s = self.last_commit_clock_s;
+        (rig_s > 0.0).then(|| self.started.elapsed().as_secs_f64() / rig_s)
+    }
+
+    fn remaining_text(&self) -> Option<String> {
+        let r = self.remaining()?;
+        let ends = self.wall_per_rig_s().map_or_else(String::new, |ratio| {
+            let wall_s = r.median_s * ratio;
+            let at = chrono::Utc::now() + chrono::Duration::milliseconds((wall_s * 1e3) as i64);
+            format!(", ends ~{} UTC", at.format("%H:%M"))
+        });
+        Some(format!("left {} (p90 {}){ends}", hours(r.median_s), hours(r.p90_s)))
+    }
+
     fn log(&self, event: &Event) {
         match event {
-            Event::Started { total, done } => tracing::info!(total, done, "{} started", self.recipe),
-            Event::Committed { unit, done, total, snr_db, status, clock_s } => {
+            Event::Started { total, done, dataset, config_hash } => {
+                tracing::info!(total, done, dataset = %dataset.display(), config_hash, "{} started", self.recipe)
+            }
+            Event::Committed { unit, done, total, snr_db, status, clock_s, .. } => {
                 tracing::info!(unit, done, total, ?snr_db, status = %status, clock_s, "committed")
             }
+            // A phase is a moment, not news: the log keeps commits and what went wrong.
+            Event::Phase { .. } => {}
             Event::Retry { unit, attempt, reason } => tracing::info!(unit, attempt, %reason, "retry"),
             Event::Recovered { detail } => tracing::warn!(%detail, "recovered"),
             Event::Paused { detail } => tracing::warn!(%detail, "paused, polling"),
@@ -226,11 +284,27 @@ impl Reporter {
 
     fn json(&self, event: &Event) -> Value {
         let mut value = match event {
-            Event::Started { total, done } => json!({ "event": "started", "total": total, "done": done }),
-            Event::Committed { unit, done, total, snr_db, status, clock_s } => {
+            Event::Started { total, done, dataset, config_hash } => json!({ "event": "started", "total": total,
+                "done": done, "dataset": dataset.display().to_string(), "config_hash": config_hash }),
+            Event::Committed { unit, done, total, snr_db, status, clock_s, position } => {
                 let (rate, eta) = self.rate_and_eta(*done, *total, *clock_s).unzip();
-                json!({ "event": "committed", "unit": unit, "done": done, "total": total, "snr_db": snr_db,
-                        "status": status, "clock_s": clock_s, "rate_per_hour": rate, "eta_h": eta })
+                let remaining = self.remaining().map(|r| json!({"median": r.median_s, "p90": r.p90_s}));
+                let mut v = json!({ "event": "committed", "unit": unit, "done": done, "total": total,
+                    "snr_db": snr_db, "status": status, "clock_s": clock_s, "rate_per_hour": rate, "eta_h": eta,
+                    "remaining_s": remaining, "retries": self.retries,
+                    "wall_s": self.started.elapsed().as_secs_f64(),
+                    "at": chrono::Utc::now().to_rfc3339_opts(chrono::SecondsFormat::Millis, true) });
+                if let (Some(p), Value::Object(map)) = (position, &mut v) {
+                    for (key, value) in
+                        [("ix", json!(p.ix)), ("iy", json!(p.iy)), ("x_m", json!(p.x_m)), ("y_m", json!(p.y_m))]
+                    {
+                        map.insert(key.into(), value);
+                    }
+                }
+                v
+            }
+            Event::Phase { unit, phase, actuators } => {
+                json!({ "event": "phase", "unit": unit, "phase": phase.as_str(), "actuators": actuators })
             }
             Event::Retry { unit, attempt, reason } => {
                 json!({ "event": "retry", "unit": unit, "attempt": attempt, "reason": reason })
@@ -251,42 +325,69 @@ impl Reporter {
         value
     }
 
+    /// Keeps the counts every display needs.
+    fn track(&mut self, event: &Event) {
+        match event {
+            Event::Started { total, done, .. } => {
+                (self.total, self.done, self.done_at_start) = (*total, *done, *done);
+            }
+            Event::Committed { done, total, clock_s, .. } => {
+                self.durations_s.push(clock_s - self.last_commit_clock_s);
+                (self.last_commit_clock_s, self.done, self.total) = (*clock_s, *done, *total);
+            }
+            Event::Retry { .. } => self.retries += 1,
+            _ => {}
+        }
+    }
+
     fn show(&mut self, event: &Event) {
         let Display::Bar(slot) = &mut self.display else { return };
         match event {
-            Event::Started { total, done } => {
+            Event::Started { total, done, .. } => {
                 self.shared_bar.set_length(*total as u64);
                 self.shared_bar.set_position(*done as u64);
-                self.shared_bar.set_message(self.unit.to_string());
+                // Ticks every second, so the elapsed time moves between commits that are minutes apart.
+                self.shared_bar.enable_steady_tick(std::time::Duration::from_secs(1));
                 *slot = Some(self.shared_bar.clone());
             }
-            Event::Committed { done, total, snr_db, clock_s, .. } => {
-                let mut message = match self.rate_and_eta(*done, *total, *clock_s) {
-                    Some((rate, eta)) => format!("{rate:.1} {}/h, ETA {eta:.2} h", self.unit),
-                    None => self.unit.to_string(),
+            Event::Phase { unit, phase, actuators } => {
+                let unit_name = if self.unit == "points" { "point" } else { "actuator" };
+                let driven = match actuators.as_slice() {
+                    [] => String::new(),
+                    [one] => format!(" actuator {one}"),
+                    all => format!(" {} actuators", all.len()),
                 };
-                if let Some(snr) = snr_db {
-                    message.push_str(&format!(", SNR {snr:.1} dB"));
-                }
+                self.activity = format!("{unit_name} {unit}: {}{driven}", phase.as_str());
+            }
+            Event::Committed { done, snr_db, .. } => {
+                self.last_commit = snr_db.map_or_else(String::new, |snr| format!(" | SNR {snr:.1} dB"));
                 self.shared_bar.set_position(*done as u64);
-                self.shared_bar.set_message(message);
             }
             Event::Recovered { detail } | Event::Paused { detail } => {
                 let detail = detail.clone();
                 self.shared_bar.suspend(|| eprintln!("{detail}"));
             }
             Event::Retry { .. } | Event::ReferenceChecked { .. } => {}
-            Event::Stopped { .. } | Event::Finished { .. } => self.shared_bar.finish(),
+            Event::Stopped { .. } | Event::Finished { .. } => {
+                self.shared_bar.finish();
+                return;
+            }
         }
+        let remaining = self.remaining_text().unwrap_or_else(|| "left: after the first commit".to_owned());
+        self.shared_bar
+            .set_message(format!("{} | retries {} | {remaining}{}", self.activity, self.retries, self.last_commit));
     }
+}
+
+/// Seconds as hours or minutes, for the bar.
+fn hours(seconds: f64) -> String {
+    if seconds >= 3600.0 { format!("{:.1} h", seconds / 3600.0) } else { format!("{:.0} min", seconds / 60.0) }
 }
 
 impl Observer for Reporter {
     fn event(&mut self, event: &Event) {
         self.log(event);
-        if let Event::Started { done, .. } = event {
-            self.done_at_start = *done;
-        }
+        self.track(event);
         if matches!(self.display, Display::Json) {
             let line = self.json(event).to_string();
             let mut out = std::io::stdout().lock();

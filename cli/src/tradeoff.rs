@@ -22,6 +22,7 @@ use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
 use metaplate_dsp::accuracy::ERROR_BAND_HZ;
 use metaplate_dsp::excitation::ExcitationProtocol;
+use metaplate_dsp::stats::quantile;
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::scan::{ScanConfig, ScanPlan, scan};
 use metaplate_recipes::{Output, RunControl, Silent};
@@ -165,7 +166,8 @@ fn measure(
     if errors.len() != plan.points.len() * actuators {
         bail!("{name}: {} of {} rows compare with the truth", errors.len(), plan.points.len() * actuators);
     }
-    let (Some(median_error_db), Some(p95_error_db)) = (truth::quantile(&errors, 0.5), truth::quantile(&errors, 0.95))
+    let (Some(median_error_db), Some(p95_error_db)) =
+        (quantile(&mut errors.clone(), 0.5), quantile(&mut errors.clone(), 0.95))
     else {
         bail!("{name}: no row to compare with the truth");
     };

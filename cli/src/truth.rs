@@ -7,6 +7,7 @@ use anyhow::Context;
 use metaplate_core::scene::Scene;
 use metaplate_dsp::accuracy::ERROR_BAND_HZ;
 use metaplate_dsp::kirkeby::KirkebyFilter;
+use metaplate_dsp::stats::quantile;
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_store::Dataset;
 use serde_json::{Value, json};
@@ -72,19 +73,13 @@ fn planned_points(dataset: &Dataset) -> Vec<usize> {
     planned.unwrap_or_else(|| dataset.points().iter().map(|&p| p as usize).collect())
 }
 
-/// The value at quantile `q` (0..=1) of sorted `values` (nearest rank), `None` when empty.
-pub fn quantile(sorted: &[f64], q: f64) -> Option<f64> {
-    let last = sorted.len().checked_sub(1)?;
-    sorted.get(((last as f64) * q).round() as usize).copied()
-}
-
 /// Sorted errors as the JSON the demo's summary and the report hold: band, row count, median, p95 and worst.
 pub fn errors_json(sorted: &[f64]) -> Value {
     json!({
         "band_hz": [ERROR_BAND_HZ.0, ERROR_BAND_HZ.1],
         "rows": sorted.len(),
-        "median": quantile(sorted, 0.5),
-        "p95": quantile(sorted, 0.95),
+        "median": quantile(&mut sorted.to_vec(), 0.5),
+        "p95": quantile(&mut sorted.to_vec(), 0.95),
         "worst": sorted.last(),
     })
 }

@@ -104,6 +104,29 @@ fn calibrate_then_scan_end_to_end_with_json_events_and_a_log() {
     assert!(last["snr_db"].as_f64().unwrap() > 20.0, "{last}");
     assert_eq!(last["eta_h"].as_f64(), Some(0.0));
     assert!(last["rate_per_hour"].as_f64().unwrap() > 0.0);
+    // Every commit says where (grid column and row, position), how, and when; the start names the dataset.
+    let manifest: Value = serde_json::from_str(&std::fs::read_to_string(scan.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(events[0]["dataset"].as_str(), Some(scan.to_str().unwrap()));
+    assert_eq!(events[0]["config_hash"], manifest["config_hash"]);
+    let dataset = Dataset::open(&scan).unwrap();
+    for c in &committed {
+        let meta = dataset.meta(c["unit"].as_u64().unwrap() as u32, 0).unwrap();
+        assert_eq!((c["ix"].as_u64(), c["iy"].as_u64()), (Some(u64::from(meta.ix)), Some(u64::from(meta.iy))), "{c}");
+        assert_eq!((c["x_m"].as_f64(), c["y_m"].as_f64()), (Some(meta.x_m), Some(meta.y_m)), "{c}");
+        assert!(c["status"].is_string() && c["wall_s"].as_f64().unwrap() >= 0.0 && c["at"].is_string(), "{c}");
+    }
+    assert_eq!(last["remaining_s"]["median"].as_f64(), Some(0.0), "nothing left: {last}");
+    // The phases of a unit: moving, playing each actuator (the quick protocol drives one at a time), committing.
+    let phases: Vec<&Value> = events.iter().filter(|e| e["event"] == "phase").collect();
+    for phase in ["moving", "playing", "committing"] {
+        assert!(phases.iter().any(|p| p["phase"] == phase), "no `{phase}` phase");
+    }
+    let driven: std::collections::BTreeSet<u64> = phases
+        .iter()
+        .filter(|p| p["phase"] == "playing")
+        .flat_map(|p| p["actuators"].as_array().unwrap().iter().map(|a| a.as_u64().unwrap()))
+        .collect();
+    assert_eq!(driven, (0..ACTUATORS as u64).collect(), "every actuator is played, and named");
 
     let log = std::fs::read_to_string(scan.join("scan.log")).unwrap();
     assert!(log.matches("committed").count() >= POINTS, "{log}");
@@ -138,9 +161,14 @@ fn ctrl_c_stops_cleanly_and_resume_completes_refusing_a_changed_configuration() 
 
     // Without --resume, the directory is refused; with a changed protocol, the resume is refused saying what
     // changed; with --force it proceeds.
-    let out = run(&args, cache);
-    assert!(!out.status.success());
-    assert!(text(&out.stderr).contains("--resume"), "{}", text(&out.stderr));
+    // A failure is one message even with RUST_BACKTRACE=1, and --json says `failed` on stdout before the exit.
+    let out = command(&args, cache).env("RUST_BACKTRACE", "1").output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("--resume") && !stderr.to_lowercase().contains("backtrace"), "{stderr}");
+    let last: Value = serde_json::from_str(text(&out.stdout).lines().last().unwrap()).unwrap();
+    assert_eq!(last["event"], "failed", "{last}");
+    assert!(last["error"].as_str().unwrap().contains("--resume"), "{last}");
     let mut changed = scan_args(&dir, &["--uncalibrated", "--resume"]);
     let protocol = changed.iter().position(|a| a == "quick").unwrap();
     changed[protocol] = "paper".into();

@@ -91,6 +91,19 @@ pub enum Event {
         total: usize,
         /// Units already committed (resume).
         done: usize,
+        /// The dataset's directory.
+        dataset: std::path::PathBuf,
+        /// The dataset's configuration hash (`sha256:<hex>`), as its manifest holds it.
+        config_hash: String,
+    },
+    /// What the run is doing now, for a live display: sent as each step of a unit begins.
+    Phase {
+        /// Grid point index (scan) or actuator number (calibration).
+        unit: usize,
+        /// The step.
+        phase: Phase,
+        /// While playing: the actuators driven (by their non-silent audio channels); empty otherwise.
+        actuators: Vec<usize>,
     },
     /// One unit committed.
     Committed {
@@ -106,6 +119,9 @@ pub enum Event {
         status: String,
         /// Simulated or real seconds since the run started, on the rig's clock.
         clock_s: f64,
+        /// Where the unit was measured: its first row's grid column and row and position (m); for a calibration,
+        /// the actuator's magnet.
+        position: Option<UnitPosition>,
     },
     /// A measurement is repeated (bounded retry) or a point deferred to the end of the run.
     Retry {
@@ -147,6 +163,44 @@ pub enum Event {
         /// Units committed.
         done: usize,
     },
+}
+
+/// A step of a unit, as [`Event::Phase`] reports it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// Aiming the beam (moving the mirrors, settling, checking the signal).
+    Moving,
+    /// Playing the excitation and recording.
+    Playing,
+    /// Waiting for the unit's processing (deconvolution, quality gates, filter design).
+    Processing,
+    /// Writing the unit to the dataset (fsync'd batch, journal, manifest).
+    Committing,
+}
+
+impl Phase {
+    /// The word a display shows.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Phase::Moving => "moving",
+            Phase::Playing => "playing",
+            Phase::Processing => "processing",
+            Phase::Committing => "committing",
+        }
+    }
+}
+
+/// Where a committed unit was measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnitPosition {
+    /// Grid column.
+    pub ix: u32,
+    /// Grid row.
+    pub iy: u32,
+    /// x, m.
+    pub x_m: f64,
+    /// y, m.
+    pub y_m: f64,
 }
 
 /// Receives a recipe's events (the CLI's progress display, a test's recorder).

@@ -17,12 +17,14 @@ pub mod events;
 pub mod output;
 pub mod plans;
 pub mod quality;
+pub mod remaining;
 
 pub use engine::acquire::RetryPolicy;
 pub use engine::aim::AimPolicy;
 pub use engine::session::RecoveryPolicy;
 pub use error::RecipeError;
-pub use events::{Event, Observer, RunControl, Silent};
+pub use events::{Event, Observer, Phase, RunControl, Silent, UnitPosition};
 pub use output::Output;
 pub use plans::calibrate::{self, Calibration, CalibrationConfig, calibrate};
 pub use plans::scan::{self, ScanConfig, ScanPlan, ScanSummary, scan};
+pub use remaining::RemainingTime;

@@ -16,7 +16,7 @@ use crate::engine::aim::Aimed;
 use crate::engine::reference::ReferenceSpec;
 use crate::engine::session::Instruments;
 use crate::error::RecipeError;
-use crate::events::{Observer, RunControl};
+use crate::events::{Event, Observer, Phase, RunControl};
 use crate::output::Output;
 
 /// One thing for the engine to do: aim (optionally), then let the plan record its playbacks.
@@ -175,6 +175,12 @@ impl Lab<'_, '_> {
         record_samples: usize,
         unit: usize,
     ) -> Result<Option<Acquired>, RecipeError> {
+        // The actuators driven: those whose audio channel carries a non-silent buffer.
+        let actuators = (self.instruments.rig.wiring.actuator_channels.iter().enumerate())
+            .filter(|(_, channel)| buffers.get(**channel as usize).is_some_and(|b| b.iter().any(|v| *v != 0.0)))
+            .map(|(actuator, _)| actuator)
+            .collect();
+        self.observer.event(&Event::Phase { unit, phase: Phase::Playing, actuators });
         acquire(self.instruments, buffers, record_samples, self.retry, unit, self.control, self.observer)
     }
 

@@ -16,7 +16,7 @@ use crate::engine::plan::{Lab, Next, Plan, Processor, Settings, Verdict};
 use crate::engine::reference::ReferenceCheck;
 use crate::engine::session::{Instruments, SessionState};
 use crate::error::RecipeError;
-use crate::events::{Event, Observer, RunControl};
+use crate::events::{Event, Observer, Phase, RunControl, UnitPosition};
 use crate::output::{self, Output};
 
 /// What a run did, for the recipe's summary.
@@ -72,6 +72,8 @@ pub fn run<P: Plan>(
             }
         });
         let mut in_flight = false;
+        // The unit whose recording the worker is processing (meaningful while `in_flight`).
+        let mut in_flight_unit = 0;
         let mut abandoned = false;
         // Per unit, the session state after its last acquisition: what it commits (the next unit may have been
         // acquired, and widened the range, before it commits).
@@ -88,19 +90,24 @@ pub fn run<P: Plan>(
                 _ => {}
             }
             let mut recorded = None;
+            let mut recorded_unit = 0;
             if let Next::Step(step) = next {
+                recorded_unit = step.unit;
                 if let Some(reference) = reference.as_mut() {
                     reference.after_recovery(&mut instruments, control, observer)?;
                 }
                 let aimed = match step.aim {
-                    Some(at) => Some(aim(
-                        &mut instruments,
-                        at.position_m,
-                        (settings.seed, step.unit as u64, at.visit),
-                        &settings.aim,
-                        control,
-                        observer,
-                    )?),
+                    Some(at) => Some({
+                        observer.event(&Event::Phase { unit: step.unit, phase: Phase::Moving, actuators: Vec::new() });
+                        aim(
+                            &mut instruments,
+                            at.position_m,
+                            (settings.seed, step.unit as u64, at.visit),
+                            &settings.aim,
+                            control,
+                            observer,
+                        )?
+                    }),
                     None => None,
                 };
                 let mut lab = Lab { instruments: &mut instruments, retry: settings.retry, control, observer };
@@ -113,6 +120,7 @@ pub fn run<P: Plan>(
                 }
             }
             if in_flight {
+                observer.event(&Event::Phase { unit: in_flight_unit, phase: Phase::Processing, actuators: Vec::new() });
                 let processed = done_rx
                     .recv()
                     .map_err(|_| RecipeError::Internal("the processing thread stopped unexpectedly".into()))?;
@@ -136,6 +144,7 @@ pub fn run<P: Plan>(
             if let Some(job) = recorded {
                 job_tx.send(job).map_err(|_| RecipeError::Internal("the processing thread stopped".into()))?;
                 in_flight = true;
+                in_flight_unit = recorded_unit;
             }
         }
         Ok(())
@@ -203,7 +212,12 @@ impl Run {
     fn start(&mut self, total: usize, done: usize, observer: &mut dyn Observer) {
         self.total = total;
         self.done = done;
-        observer.event(&Event::Started { total, done });
+        observer.event(&Event::Started {
+            total,
+            done,
+            dataset: self.writer.dir().to_path_buf(),
+            config_hash: self.writer.manifest().config_hash.clone(),
+        });
     }
 
     /// Seconds on the rig's clock since the run opened.
@@ -233,6 +247,7 @@ impl Run {
         control: &RunControl,
         observer: &mut dyn Observer,
     ) -> Result<f64, RecipeError> {
+        observer.event(&Event::Phase { unit, phase: Phase::Committing, actuators: Vec::new() });
         let started = std::time::Instant::now();
         self.writer.commit_batch_with_state(records, Some(state.to_json()))?;
         self.writer.checkpoint()?;
@@ -246,6 +261,12 @@ impl Run {
             snr_db,
             status: status.to_string(),
             clock_s: self.elapsed_s(),
+            position: records.first().map(|r| UnitPosition {
+                ix: r.meta.ix,
+                iy: r.meta.iy,
+                x_m: r.meta.x_m,
+                y_m: r.meta.y_m,
+            }),
         });
         control.committed(self.commits);
         Ok(commit_s)
