@@ -37,7 +37,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     };
     let config = CalibrationConfig { seed: common.seed.unwrap_or(plate.scene.seed), ..CalibrationConfig::default() };
     let control = RunControl::new();
-    let mut reporter = Reporter::new("calibrate", "actuators", common.json);
+    let mut reporter = Reporter::new("calibrate", "actuators", common);
     run::handle_ctrl_c(&control, reporter.bar())?;
     let sites = plate.actuator_sites_m();
     let result = calibrate(&mut rig, &sites, &config, &common.output(plate.id.clone()), &control, &mut reporter);

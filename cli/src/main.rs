@@ -12,6 +12,7 @@ mod demo;
 mod export;
 mod focus;
 mod import;
+mod notify;
 mod paper_table;
 mod progress;
 mod replay;
@@ -84,18 +85,25 @@ enum Command {
 
 /// Runs the command; a failure is printed as one message (its causes after colons, never a backtrace, whatever
 /// `RUST_BACKTRACE` says) and exits with 1. A `scan` or `calibrate` with `--json` prints a `failed` event first,
-/// so a script reading the events learns of it on the same channel.
+/// so a script reading the events learns of it on the same channel, and runs its `--notify-command`.
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    let json_recipe = match &cli.command {
-        Command::Scan(args) if args.run.json => Some("scan"),
-        Command::Calibrate(args) if args.run.json => Some("calibrate"),
+    let run = match &cli.command {
+        Command::Scan(args) => Some(("scan", args.run.clone())),
+        Command::Calibrate(args) => Some(("calibrate", args.run.clone())),
         _ => None,
     };
     let Err(error) = dispatch(cli.command) else { return std::process::ExitCode::SUCCESS };
     let message = format!("{error:#}");
-    if let Some(recipe) = json_recipe {
-        println!("{}", serde_json::json!({"event": "failed", "recipe": recipe, "error": message}));
+    if let Some((recipe, args)) = run {
+        let failed = serde_json::json!({"event": "failed", "recipe": recipe, "error": message,
+            "dataset": args.out.display().to_string()});
+        if args.json {
+            println!("{failed}");
+        }
+        if let Some(command) = args.notify_command {
+            notify::Notifier::new(command).notify("failed", "failed", failed);
+        }
     }
     eprintln!("error: {message}");
     std::process::ExitCode::FAILURE

@@ -5,7 +5,7 @@
 use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use anyhow::Context;
 use clap::Args;
@@ -14,6 +14,7 @@ use metaplate_recipes::{Event, Observer, Output, RecipeError, RemainingTime, Run
 use metaplate_store::{MANIFEST_FILE, SceneId, StoreError};
 use serde_json::{Value, json};
 
+use crate::notify::{Notifier, StallWatch};
 use crate::progress;
 
 /// Exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
@@ -77,6 +78,22 @@ pub struct RunArgs {
     /// Mock lab only: where the plate's Green's functions are cached.
     #[command(flatten)]
     pub cache: crate::cache::CacheArgs,
+    /// Run this shell command (`sh -c CMD`) with a JSON summary on its standard input when the run finishes,
+    /// stops, fails or stalls, once per event (mail, a chat webhook, a desktop notification: see the README).
+    #[arg(long, value_name = "CMD")]
+    pub notify_command: Option<String>,
+    /// With --notify-command: the run is stalled after this many seconds without a commit (default: 3 x the
+    /// median time between commits so far, at least 120 s; 900 s before the first commit).
+    #[arg(long, requires = "notify_command", value_parser = positive_seconds)]
+    pub stall_after_s: Option<f64>,
+}
+
+/// A finite number of seconds above zero.
+fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 => Ok(s),
+        _ => Err(format!("`{text}` is not a positive number of seconds")),
+    }
 }
 
 impl RunArgs {
@@ -199,14 +216,22 @@ pub struct Reporter {
     last_commit: String,
     total: usize,
     done: usize,
+    /// The dataset's directory, once started.
+    dataset: Option<PathBuf>,
+    /// Units committed by this run, by their worst row's status.
+    status_counts: std::collections::BTreeMap<String, usize>,
+    /// `--notify-command`, and the stall watch it gets once the run starts.
+    notifier: Option<Arc<Notifier>>,
+    stall_after_s: Option<f64>,
+    watch: Option<StallWatch>,
 }
 
 impl Reporter {
-    /// A reporter for `recipe` (`scan`, `calibrate`) counting `unit`s (`points`, `actuators`), as JSON lines when
-    /// `json`.
-    pub fn new(recipe: &'static str, unit: &'static str, json: bool) -> Self {
+    /// A reporter for `recipe` (`scan`, `calibrate`) counting `unit`s (`points`, `actuators`), as the run's
+    /// options ask: JSON lines with `--json`, notifications with `--notify-command`.
+    pub fn new(recipe: &'static str, unit: &'static str, args: &RunArgs) -> Self {
         let shared_bar = progress::run_bar(0, 0, recipe);
-        let display = if json { Display::Json } else { Display::Bar(None) };
+        let display = if args.json { Display::Json } else { Display::Bar(None) };
         Self {
             recipe,
             unit,
@@ -221,6 +246,47 @@ impl Reporter {
             last_commit: String::new(),
             total: 0,
             done: 0,
+            dataset: None,
+            status_counts: std::collections::BTreeMap::new(),
+            notifier: args.notify_command.clone().map(Notifier::new),
+            stall_after_s: args.stall_after_s,
+            watch: None,
+        }
+    }
+
+    /// What a notification says of the run so far.
+    fn summary(&self) -> Value {
+        json!({
+            "recipe": self.recipe,
+            "dataset": self.dataset.as_ref().map(|d| d.display().to_string()),
+            "done": self.done,
+            "total": self.total,
+            "unit_kind": self.unit,
+            "committed_by_status": self.status_counts,
+            "retries": self.retries,
+            "wall_s": self.started.elapsed().as_secs_f64(),
+            "remaining_s": self.remaining().map(|r| json!({"median": r.median_s, "p90": r.p90_s})),
+        })
+    }
+
+    /// Notifications: the watch starts with the run and hears of every commit; the end is notified once.
+    fn notify(&mut self, event: &Event) {
+        let Some(notifier) = self.notifier.clone() else { return };
+        match event {
+            Event::Started { .. } => {
+                self.watch = Some(StallWatch::start(notifier, self.stall_after_s, self.summary()));
+            }
+            Event::Committed { .. } => {
+                if let Some(watch) = &self.watch {
+                    watch.committed(self.summary());
+                }
+            }
+            Event::Finished { .. } | Event::Stopped { .. } => {
+                self.watch = None;
+                let name = if matches!(event, Event::Finished { .. }) { "finished" } else { "stopped" };
+                notifier.notify(name, name, self.summary());
+            }
+            _ => {}
         }
     }
 
@@ -328,12 +394,14 @@ impl Reporter {
     /// Keeps the counts every display needs.
     fn track(&mut self, event: &Event) {
         match event {
-            Event::Started { total, done, .. } => {
+            Event::Started { total, done, dataset, .. } => {
                 (self.total, self.done, self.done_at_start) = (*total, *done, *done);
+                self.dataset = Some(dataset.clone());
             }
-            Event::Committed { done, total, clock_s, .. } => {
+            Event::Committed { done, total, clock_s, status, .. } => {
                 self.durations_s.push(clock_s - self.last_commit_clock_s);
                 (self.last_commit_clock_s, self.done, self.total) = (*clock_s, *done, *total);
+                *self.status_counts.entry(status.clone()).or_default() += 1;
             }
             Event::Retry { .. } => self.retries += 1,
             _ => {}
@@ -388,6 +456,7 @@ impl Observer for Reporter {
     fn event(&mut self, event: &Event) {
         self.log(event);
         self.track(event);
+        self.notify(event);
         if matches!(self.display, Display::Json) {
             let line = self.json(event).to_string();
             let mut out = std::io::stdout().lock();

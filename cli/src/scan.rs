@@ -75,7 +75,7 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     };
     let config = ScanConfig { protocol, seed: common.seed.unwrap_or(plate.scene.seed), ..ScanConfig::default() };
     let control = RunControl::new();
-    let mut reporter = Reporter::new("scan", "points", common.json);
+    let mut reporter = Reporter::new("scan", "points", common);
     run::handle_ctrl_c(&control, reporter.bar())?;
     let output = common.output(plate.id.clone());
     let result = scan(&mut rig, &plan, calibration.as_ref(), &config, &output, &control, &mut reporter);

@@ -256,3 +256,35 @@ fn a_scan_that_finishes_with_flagged_rows_exits_3_and_the_codes_are_in_the_help(
         assert!(help.contains(name), "{name} missing from: {help}");
     }
 }
+
+#[test]
+fn notify_command_hears_of_stalls_the_finish_and_a_failure_once_each() {
+    let cache = cache_dir();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("scan");
+    let notes = tmp.path().join("notes.jsonl");
+    let notify = format!("cat >> '{}'", notes.display());
+    // A stall limit far below the mock lab's time per point, so that gaps between commits count as stalls.
+    let args = scan_args(&dir, &["--uncalibrated", "--notify-command", &notify, "--stall-after-s", "0.05"]);
+    let out = run(&args, cache);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let read = || -> Vec<Value> {
+        std::fs::read_to_string(&notes).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect()
+    };
+    let got = read();
+    let last = got.last().unwrap();
+    assert_eq!(last["event"], "finished", "{got:?}");
+    assert_eq!((last["done"].as_u64(), last["total"].as_u64()), (Some(POINTS as u64), Some(POINTS as u64)));
+    assert_eq!(last["dataset"].as_str(), Some(dir.to_str().unwrap()));
+    let stalls = got.iter().filter(|n| n["event"] == "stalled").count();
+    // At most once per gap: before the first commit, between commits, and after the last (before the finish).
+    assert!((1..=POINTS + 1).contains(&stalls), "{stalls} stall notifications: {got:?}");
+    assert_eq!(got.iter().filter(|n| n["event"] == "finished").count(), 1);
+
+    // A run that fails (the directory holds a finished run) notifies `failed` with the message.
+    let out = run(&args, cache);
+    assert_eq!(out.status.code(), Some(1));
+    let failed = read().into_iter().last().unwrap();
+    assert_eq!(failed["event"], "failed");
+    assert!(failed["error"].as_str().unwrap().contains("--resume"), "{failed}");
+}
