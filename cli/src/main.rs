@@ -9,6 +9,7 @@ mod cache;
 mod calibrate;
 mod deconvolve;
 mod demo;
+mod devices;
 mod export;
 mod focus;
 mod import;
@@ -46,6 +47,9 @@ enum Command {
     /// The main job: run the suite end to end on the built-in simulated plates and print the paper-against-suite
     /// table.
     Demo(demo::DemoArgs),
+    /// What is connected that a hardware file can name (serial ports, USB DAQs, NI-DAQmx devices, ALSA PCMs, HID
+    /// keypads), per instrument; --write-hardware drafts a hardware file from it.
+    Devices(devices::DevicesArgs),
     /// Deconvolve a recorded WAV by its excitation (or by a loopback channel) into impulse responses.
     Deconvolve(deconvolve::DeconvolveArgs),
     /// Drive signals that focus target waveforms on virtual pixels (multichannel WAV), from a dataset.
@@ -113,6 +117,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Analyze(args) => analyze::run(&args),
         Command::Demo(args) => demo::run(&args),
+        Command::Devices(args) => devices::run(&args),
         Command::Deconvolve(args) => deconvolve::run(&args),
         Command::Focus(args) => focus::run(&args),
         Command::Export(args) => export::run(&args),

@@ -137,3 +137,40 @@ fn simulate_dispersion_prints_the_documented_json() {
     assert!((0.038..0.047).contains(&lambda), "{lambda}");
     assert!((a0 - 0.1268).abs() < 0.001, "{a0}");
 }
+
+#[test]
+fn devices_lists_every_backend_and_drafts_a_hardware_file_that_parses() {
+    // Whatever this machine has (CI has no USB bus, no sound card, no NI-DAQmx), the listing succeeds.
+    let out = metaplate(&["devices", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let listing: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let backends = |section: &str| -> Vec<String> {
+        listing[section].as_array().unwrap().iter().map(|b| b["backend"].as_str().unwrap().to_owned()).collect()
+    };
+    assert_eq!(backends("ldv"), ["serial"]);
+    assert_eq!(backends("daq"), ["usb-bulk", "nidaqmx"]);
+    assert_eq!(backends("audio"), ["alsa"]);
+    assert_eq!(backends("keypad"), ["hidraw"]);
+    for section in ["ldv", "daq", "audio", "keypad"] {
+        for b in listing[section].as_array().unwrap() {
+            for f in b["found"].as_array().unwrap() {
+                assert!(f["key"].as_str().unwrap().starts_with(section), "{f}");
+                assert!(!f["value"].as_str().unwrap().is_empty(), "{f}");
+            }
+        }
+    }
+
+    let dir = scratch("devices");
+    let draft = dir.join("rig.toml");
+    let out = metaplate(&["devices", "--write-hardware", draft.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&draft).unwrap();
+    assert!(text.contains("CHOOSE"), "the user's choices are marked:\n{text}");
+    metaplate_drivers::HardwareFile::load(&draft).unwrap_or_else(|e| panic!("the draft does not parse: {e}\n{text}"));
+    // Never replaced.
+    let out = metaplate(&["devices", "--write-hardware", draft.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("exists"));
+    assert_eq!(std::fs::read_to_string(&draft).unwrap(), text);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

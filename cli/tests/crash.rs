@@ -219,8 +219,16 @@ fn calibrate_killed_inside_actuators_then_resumed_equals_an_uninterrupted_run() 
             // first `committed`, so that the run makes progress), well clear of both ends.
             let marker = if rng.uniform() < 0.3 { "\"started\"" } else { "\"committed\"" };
             let seen = lines.by_ref().find(|l| l.contains(marker) || l.contains("\"finished\""));
+            // Then into a step of the actuator the run is on: as it plays, waits for its processing, or commits
+            // (the engine's phase events), and a little later, so the kill lands inside that step whatever the
+            // machine's load (a sleep timed on the uninterrupted run alone let loaded runs commit several actuators
+            // between kills, and the calibration ran out of actuators before enough kills had landed).
+            let phase = ["\"playing\"", "\"processing\"", "\"committing\""][(rng.uniform() * 3.0) as usize % 3];
+            let seen = seen
+                .filter(|l| !l.contains("\"finished\""))
+                .and_then(|_| lines.by_ref().find(|l| l.contains(phase) || l.contains("\"finished\"")));
             if seen.is_some_and(|l| !l.contains("\"finished\"")) {
-                std::thread::sleep(per_unit.mul_f64(0.2 + (0.8 - 0.2) * rng.uniform()));
+                std::thread::sleep(per_unit.mul_f64(0.15 * rng.uniform()));
                 if child.try_wait().unwrap().is_none() {
                     child.kill().unwrap();
                     killed = true;

@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use common::{
     Recorder, assert_same_rows, image, metamaterial, output, quick_config, run_scan, run_scan_with, small_plan,
 };
-use metaplate_recipes::scan::{ScanConfig, scan};
+use metaplate_recipes::scan::{ScanConfig, ScanPlan, scan};
 use metaplate_recipes::{Event, RecipeError, RunControl, Silent};
 use metaplate_store::{Dataset, StoreError};
 
@@ -96,8 +96,9 @@ fn stopped_and_abandoned_runs_resume_to_the_uninterrupted_dataset() {
     assert_same_rows(&reference, &resumed, "resumed vs uninterrupted");
 }
 
-#[test]
-fn a_changed_configuration_is_refused_saying_what_changed_and_proceeds_when_forced() {
+/// A 3-point metamaterial scan stopped after its first commit: the scene, the plan, the dataset's directory and
+/// the points committed.
+fn scan_stopped_after_one_point() -> (metaplate_core::scene::Scene, ScanPlan, tempfile::TempDir, usize) {
     let scene = metamaterial();
     let plan = small_plan(3);
     let dir = tempfile::tempdir().unwrap();
@@ -105,6 +106,12 @@ fn a_changed_configuration_is_refused_saying_what_changed_and_proceeds_when_forc
     control.stop_after_commits(1);
     let err = run_scan(&plan, &output(dir.path(), &scene, false), &control, &mut Silent).unwrap_err();
     let RecipeError::Interrupted { committed } = err else { panic!("{err}") };
+    (scene, plan, dir, committed)
+}
+
+#[test]
+fn a_changed_configuration_is_refused_saying_what_changed_and_proceeds_when_forced() {
+    let (scene, plan, dir, committed) = scan_stopped_after_one_point();
 
     let changed = ScanConfig { min_snr_db: 25.0, ..quick_config() };
     let err =
@@ -121,6 +128,35 @@ fn a_changed_configuration_is_refused_saying_what_changed_and_proceeds_when_forc
     let summary = run_scan_with(&plan, &changed, &forced, &RunControl::new(), &mut Silent).unwrap();
     assert_eq!((summary.committed_now, summary.committed), (3 - committed, 3));
     assert_eq!(Dataset::open(dir.path()).unwrap().len(), 3 * scene.actuators.len());
+}
+
+#[test]
+fn a_resume_on_other_wiring_is_refused_naming_it() {
+    let (scene, plan, dir, _) = scan_stopped_after_one_point();
+    // The dataset records the rig it was measured on.
+    let rig_recorded = Dataset::open(dir.path()).unwrap().manifest().meta.config["rig"].clone();
+    assert_eq!(rig_recorded["vibrometer"]["serial"], "LAB-LDV-0001", "{rig_recorded}");
+    assert_eq!(rig_recorded["wiring"]["loopback_channel"], 8, "{rig_recorded}");
+
+    // The same lab with actuators 0 and 1 cabled the other way round.
+    let (lab, _) = common::lab_and_plan(&scene, 7, 5);
+    let mut rig = lab.rig().unwrap();
+    rig.wiring.actuator_channels.swap(0, 1);
+    let err = scan(
+        &mut rig,
+        &plan,
+        None,
+        &quick_config(),
+        &output(dir.path(), &scene, true),
+        &RunControl::new(),
+        &mut Silent,
+    )
+    .unwrap_err();
+    let message = err.to_string();
+    let RecipeError::Store(StoreError::ConfigChanged { differences, .. }) = &err else { panic!("{message}") };
+    assert_eq!(differences.len(), 1, "{differences:?}");
+    assert!(differences[0].contains("rig.wiring.actuator_channels"), "{differences:?}");
+    assert!(message.contains("force"), "{message}");
 }
 
 /// One scan run of the first `points` of the homogeneous scene's 7 x 5 plan on a fresh lab (a restarted program).

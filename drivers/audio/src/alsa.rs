@@ -163,6 +163,68 @@ impl Drop for AlsaSink {
     }
 }
 
+/// A playback PCM of a sound card, as `metaplate devices` lists it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PcmListing {
+    /// The name the hardware file's `audio.device` takes (`hw:CARD=24Ao,DEV=0`).
+    pub name: String,
+    /// The card's long name.
+    pub card: String,
+    /// Channels it can open, lowest and highest; `None` when it could not be opened to ask (in use).
+    pub channels: Option<(u32, u32)>,
+    /// Frame rates it can run at, lowest and highest, Hz; `None` as above.
+    pub rates_hz: Option<(u32, u32)>,
+    /// Why it could not be asked, empty when it could.
+    pub note: String,
+}
+
+/// Every playback PCM of every sound card (the hardware devices `hw:CARD=...,DEV=...`, which run at exactly the
+/// asked rate), with the channel counts and rates it accepts. A PCM in use by another program is listed with a
+/// note instead of its ranges.
+///
+/// # Errors
+/// [`PcmError::Other`] when the cards cannot be enumerated at all.
+pub fn playback_pcms() -> Result<Vec<PcmListing>, PcmError> {
+    let mut found = Vec::new();
+    for card in alsa::card::Iter::new() {
+        let card = card.map_err(|e| PcmError::Other(format!("enumerating sound cards: {e}")))?;
+        let index = card.get_index();
+        let Ok(ctl) = alsa::Ctl::new(&format!("hw:{index}"), false) else { continue };
+        let Ok(info) = ctl.card_info() else { continue };
+        let id = info.get_id().unwrap_or_default().to_owned();
+        let card_name = card.get_longname().unwrap_or_default();
+        for device in alsa::ctl::DeviceIter::new(&ctl) {
+            let Ok(device_index) = u32::try_from(device) else { continue };
+            // Playback devices only: a capture-only device has no playback PCM info.
+            if ctl.pcm_info(device_index, 0, Direction::Playback).is_err() {
+                continue;
+            }
+            let name = format!("hw:CARD={id},DEV={device}");
+            let mut listing = PcmListing {
+                name: name.clone(),
+                card: card_name.clone(),
+                channels: None,
+                rates_hz: None,
+                note: String::new(),
+            };
+            match pcm_ranges(&name) {
+                Ok((channels, rates)) => (listing.channels, listing.rates_hz) = (Some(channels), Some(rates)),
+                Err(e) => listing.note = map_error(&name, "asking its ranges", e).to_string(),
+            }
+            found.push(listing);
+        }
+    }
+    Ok(found)
+}
+
+/// The channel and rate ranges of the playback PCM `name`, opened non-blocking and closed again.
+#[allow(clippy::type_complexity)] // Two (lowest, highest) pairs: channels and rates.
+fn pcm_ranges(name: &str) -> Result<((u32, u32), (u32, u32)), alsa::Error> {
+    let pcm = PCM::new(name, Direction::Playback, true)?;
+    let hw = HwParams::any(&pcm)?;
+    Ok(((hw.get_channels_min()?, hw.get_channels_max()?), (hw.get_rate_min()?, hw.get_rate_max()?)))
+}
+
 /// (card name, card long name) of a PCM, or empty strings when it cannot be opened.
 fn card_names(pcm_name: &str) -> (String, String) {
     let card = CString::new(pcm_name)

@@ -14,7 +14,7 @@ pub mod driver;
 pub mod sink;
 
 #[cfg(all(feature = "alsa", target_os = "linux"))]
-pub use alsa::{AlsaSink, SampleFormat};
+pub use alsa::{AlsaSink, PcmListing, SampleFormat, playback_pcms};
 
 pub use driver::AudioDriver;
 pub use sink::{PcmError, PcmParams, PcmSink, PcmStatus};

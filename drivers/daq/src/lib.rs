@@ -22,7 +22,7 @@ pub mod usb;
 
 pub use driver::{DaqDriver, DriverSettings, DriverStats, to_wire};
 #[cfg(feature = "nidaqmx")]
-pub use nidaqmx::NiDaqmx;
+pub use nidaqmx::{NiDaqmx, device_names as nidaqmx_device_names};
 pub use transport::{BulkTransport, TransportError, UsbSelector, reopen_dropping_first};
 #[cfg(feature = "usb")]
 pub use usb::{UsbListing, UsbTransport, usb_devices};

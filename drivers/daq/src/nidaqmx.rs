@@ -4,7 +4,8 @@
 //!
 //! Only the functions a continuous analog-input acquisition needs are used, declared from NI's documented C API
 //! (`NIDAQmx.h`): `DAQmxCreateTask`, `DAQmxCreateAIVoltageChan`, `DAQmxCfgSampClkTiming`, `DAQmxStartTask`,
-//! `DAQmxReadAnalogF64`, `DAQmxStopTask`, `DAQmxClearTask`, `DAQmxGetExtendedErrorInfo`.
+//! `DAQmxReadAnalogF64`, `DAQmxStopTask`, `DAQmxClearTask`, `DAQmxGetExtendedErrorInfo`, and `DAQmxGetSysDevNames` to
+//! list the devices.
 //!
 //! This is the crate's only module with `unsafe` code (foreign calls); each block says why it is sound.
 //! Limits: NI-DAQmx reports neither lost packets nor a sample clock per block, so a block's integrity carries only
@@ -91,6 +92,38 @@ fn unavailable(library: &OsStr, e: impl std::fmt::Display) -> DaqError {
 
 fn c_string(text: &str) -> Result<CString, DaqError> {
     CString::new(text).map_err(|_| DaqError::Config { detail: format!("{text:?} contains a NUL byte") })
+}
+
+/// The NI-DAQmx devices of this computer (their NI names, `Dev1`, as `daq.device` takes them), by
+/// `DAQmxGetSysDevNames`; `Ok(None)` when the library is not installed (no NI device can be driven: not an error).
+///
+/// # Errors
+/// [`DaqError::Device`] with NI's status when the library loads but the call fails; [`DaqError::Unavailable`]
+/// when it lacks the function.
+pub fn device_names() -> Result<Option<Vec<String>>, DaqError> {
+    type GetSysDevNames = unsafe extern "system" fn(*mut c_char, u32) -> i32;
+    let library = OsStr::new(LIBRARY_NAME);
+    // SAFETY: as in `open_library`: a vendor library meant to be loaded by applications.
+    let Ok(lib) = (unsafe { Library::new(library) }) else { return Ok(None) };
+    // SAFETY: the signature NIDAQmx.h declares (`int32 DAQmxGetSysDevNames(char *data, uInt32 bufferSize)`); the
+    // pointer is used only while `lib` is loaded, within this function.
+    let get: GetSysDevNames = unsafe { *lib.get(b"DAQmxGetSysDevNames\0").map_err(|e| unavailable(library, e))? };
+    // Called with no buffer, it returns the size the names need (a positive number), or an error (negative).
+    // SAFETY: a null buffer of size 0 is the documented way to ask for the size.
+    let size = unsafe { get(ptr::null_mut(), 0) };
+    if size < 0 {
+        return Err(DaqError::Device { code: i64::from(size), detail: "DAQmxGetSysDevNames (asking the size)".into() });
+    }
+    let mut buffer = vec![0 as c_char; usize::try_from(size).unwrap_or(0).max(1)];
+    let capacity = u32::try_from(buffer.len()).unwrap_or(u32::MAX);
+    // SAFETY: `buffer` holds `capacity` writable chars; NI writes at most that many, NUL-terminated.
+    let status = unsafe { get(buffer.as_mut_ptr(), capacity) };
+    if status < 0 {
+        return Err(DaqError::Device { code: i64::from(status), detail: "DAQmxGetSysDevNames".into() });
+    }
+    let bytes: Vec<u8> = buffer.iter().take_while(|c| **c != 0).map(|c| *c as u8).collect();
+    let names = String::from_utf8_lossy(&bytes);
+    Ok(Some(names.split(',').map(str::trim).filter(|n| !n.is_empty()).map(str::to_owned).collect()))
 }
 
 impl NiDaqmx {

@@ -37,11 +37,15 @@ pub struct UsbListing {
     pub description: String,
 }
 
-/// The USB devices this system lists (empty when there are none).
+/// The USB devices this system lists (empty when there are none, and on Linux when the machine has no USB bus:
+/// no `/sys/bus/usb`, as in many virtual machines and containers).
 ///
 /// # Errors
 /// [`TransportError::Other`] when the bus cannot be listed.
 pub fn usb_devices() -> Result<Vec<UsbListing>, TransportError> {
+    if cfg!(target_os = "linux") && !std::path::Path::new("/sys/bus/usb/devices").exists() {
+        return Ok(Vec::new());
+    }
     let devices = nusb::list_devices().wait().map_err(|e| nusb_error("listing USB devices", e))?;
     Ok(devices
         .map(|d| {

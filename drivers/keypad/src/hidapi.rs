@@ -90,6 +90,43 @@ impl HidapiInput {
     }
 }
 
+/// A HID device that looks like a keypad, as `metaplate devices` lists it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HidListing {
+    /// `VID:PID` or `VID:PID:SERIAL` (hex ids), as the hardware file's `keypad.usb` takes it.
+    pub usb: String,
+    /// Manufacturer and product as the device names itself.
+    pub description: String,
+}
+
+/// Every HID interface with a keyboard or keypad collection (usage page 0x01, usage 0x06 or 0x07), once per
+/// device.
+///
+/// # Errors
+/// As [`HidapiInput::open`] when the HID devices cannot be enumerated.
+pub fn keypads() -> Result<Vec<HidListing>, TransportError> {
+    let api = HidApi::new().map_err(|e| map_error("enumerating HID devices", e))?;
+    let mut found: Vec<HidListing> = Vec::new();
+    for info in api.device_list() {
+        if info.usage_page() != KEYBOARD_USAGE.0 || !matches!(info.usage(), 0x06 | 0x07) {
+            continue;
+        }
+        let ids = format!("{:04x}:{:04x}", info.vendor_id(), info.product_id());
+        let usb = match info.serial_number().filter(|s| !s.is_empty()) {
+            Some(serial) => format!("{ids}:{serial}"),
+            None => ids,
+        };
+        let description = [info.manufacturer_string().unwrap_or_default(), info.product_string().unwrap_or_default()]
+            .join(" ")
+            .trim()
+            .to_owned();
+        if !found.iter().any(|f| f.usb == usb) {
+            found.push(HidListing { usb, description });
+        }
+    }
+    Ok(found)
+}
+
 /// Maps a hidapi error to a [`TransportError`].
 fn map_error(doing: &str, error: HidError) -> TransportError {
     let detail = format!("{doing}: {error}");

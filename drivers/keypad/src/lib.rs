@@ -16,7 +16,7 @@ pub mod transport;
 pub use metaplate_keypad_protocol as report;
 
 #[cfg(all(feature = "hidraw", target_os = "linux"))]
-pub use self::hidapi::{HidapiInput, HidapiSelector};
+pub use self::hidapi::{HidListing, HidapiInput, HidapiSelector, keypads};
 pub use driver::{KeyEvent, Keypad, KeypadError, ReportPrefix};
 pub use metaplate_keypad_protocol::{BootDecoder, Key, KeyAction, KeyChange, ReportError};
 pub use transport::{HidInput, TransportError};

@@ -94,8 +94,8 @@ impl Backend {
         }
     }
 
-    /// What of this backend is connected. Empty when nothing is, when this build lacks the backend, and for the
-    /// backends that do not enumerate yet (`nidaqmx`, `alsa`, `hidraw`: issue 16's `metaplate devices`).
+    /// What of this backend is connected. Empty when nothing is and when this build lacks the backend (and for
+    /// `nidaqmx` when NI-DAQmx is not installed).
     ///
     /// # Errors
     /// [`ListError`] when the system cannot be asked (the bus cannot be read).
@@ -131,7 +131,7 @@ pub const BACKENDS: [Backend; 5] = [
         feature: "nidaqmx",
         available: cfg!(feature = "nidaqmx"),
         linux_only: false,
-        list: list_nothing,
+        list: list_nidaqmx,
     },
     Backend {
         capability: Capability::Audio,
@@ -140,7 +140,7 @@ pub const BACKENDS: [Backend; 5] = [
         feature: "alsa",
         available: cfg!(all(feature = "alsa", target_os = "linux")),
         linux_only: true,
-        list: list_nothing,
+        list: list_alsa,
     },
     Backend {
         capability: Capability::Keypad,
@@ -149,7 +149,7 @@ pub const BACKENDS: [Backend; 5] = [
         feature: "hidraw",
         available: cfg!(all(feature = "hidraw", target_os = "linux")),
         linux_only: true,
-        list: list_nothing,
+        list: list_hidraw,
     },
 ];
 
@@ -168,9 +168,61 @@ pub(crate) fn names(capability: Capability) -> Vec<&'static str> {
     of(capability).map(|b| b.name).collect()
 }
 
-/// For the backends that cannot enumerate their devices yet.
+/// For a backend this build lacks (never called: [`Backend::list`] checks `available` first).
+#[allow(dead_code)] // Used only in builds without some backend.
 fn list_nothing() -> Result<Vec<Found>, ListError> {
     Ok(Vec::new())
+}
+
+/// NI-DAQmx devices by their NI names; none when NI-DAQmx is not installed (not an error: the backend is there,
+/// the vendor library is not).
+#[cfg(feature = "nidaqmx")]
+fn list_nidaqmx() -> Result<Vec<Found>, ListError> {
+    let names =
+        metaplate_daq::nidaqmx_device_names().map_err(|e| ListError { backend: "nidaqmx", detail: e.to_string() })?;
+    Ok(names
+        .unwrap_or_default()
+        .into_iter()
+        .map(|name| Found { key: "daq.device", value: name, description: "NI-DAQmx device".into() })
+        .collect())
+}
+
+#[cfg(not(feature = "nidaqmx"))]
+fn list_nidaqmx() -> Result<Vec<Found>, ListError> {
+    list_nothing()
+}
+
+/// ALSA playback PCMs with the channel counts and rates they accept.
+#[cfg(all(feature = "alsa", target_os = "linux"))]
+fn list_alsa() -> Result<Vec<Found>, ListError> {
+    let pcms = metaplate_audio::playback_pcms().map_err(|e| ListError { backend: "alsa", detail: e.to_string() })?;
+    Ok(pcms
+        .into_iter()
+        .map(|pcm| {
+            let ranges = match (pcm.channels, pcm.rates_hz) {
+                (Some((c0, c1)), Some((r0, r1))) => format!("{c0} to {c1} channels, {r0} to {r1} Hz"),
+                _ => pcm.note,
+            };
+            Found { key: "audio.device", value: pcm.name, description: format!("{}: {ranges}", pcm.card) }
+        })
+        .collect())
+}
+
+#[cfg(not(all(feature = "alsa", target_os = "linux")))]
+fn list_alsa() -> Result<Vec<Found>, ListError> {
+    list_nothing()
+}
+
+/// HID devices with a keyboard or keypad collection.
+#[cfg(all(feature = "hidraw", target_os = "linux"))]
+fn list_hidraw() -> Result<Vec<Found>, ListError> {
+    let pads = metaplate_keypad::keypads().map_err(|e| ListError { backend: "hidraw", detail: e.to_string() })?;
+    Ok(pads.into_iter().map(|p| Found { key: "keypad.usb", value: p.usb, description: p.description }).collect())
+}
+
+#[cfg(not(all(feature = "hidraw", target_os = "linux")))]
+fn list_hidraw() -> Result<Vec<Found>, ListError> {
+    list_nothing()
 }
 
 #[cfg(feature = "serial")]

@@ -14,6 +14,7 @@ use metaplate_store::{DatasetMeta, IrRecord};
 use crate::engine::aim::aim;
 use crate::engine::plan::{Lab, Next, Plan, Processor, Settings, Verdict};
 use crate::engine::reference::ReferenceCheck;
+use crate::engine::rig_record::rig_config;
 use crate::engine::session::{Instruments, SessionState};
 use crate::error::RecipeError;
 use crate::events::{Event, Observer, Phase, RunControl, UnitPosition};
@@ -52,7 +53,9 @@ pub fn run<P: Plan>(
     control: &RunControl,
     observer: &mut dyn Observer,
 ) -> Result<RunReport, RecipeError> {
-    let mut run = Run::open(out, plan.meta(out), rig.clock.clone(), control)?;
+    let mut meta = plan.meta(out);
+    meta.config.insert("rig".into(), rig_config(rig)?);
+    let mut run = Run::open(out, meta, rig.clock.clone(), control)?;
     let (total, done_before) = plan.start(&run.committed_keys);
     run.start(total, done_before, observer);
     let state = run.session_state(SessionState { velocity_range_m_s: settings.max_velocity_m_s });
