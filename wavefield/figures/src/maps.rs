@@ -106,14 +106,8 @@ impl Figure for Maps<'_> {
 }
 
 impl<'a> Maps<'a> {
-    fn new(
-        title: String,
-        overlay: &'a PlateOverlay,
-        grid: GridSpec,
-        panels: Vec<MapPanel<'a>>,
-        bar: Option<(String, f64, f64)>,
-        extra_key: Vec<(Key, String)>,
-    ) -> Self {
+    /// Maps of `panels` under `title`, with `overlay` drawn on each and its marks in the key; no bar.
+    fn new(title: String, overlay: &'a PlateOverlay, grid: GridSpec, panels: Vec<MapPanel<'a>>) -> Self {
         let frame_cm = frame_cm(&grid, overlay);
         let mut key = Vec::new();
         if panels.iter().any(|p| p.contour_at.is_some()) {
@@ -132,8 +126,14 @@ impl<'a> Maps<'a> {
             key.push((Key::Rod, "resonator rod".to_owned()));
             key.push((Key::Region, "resonator region".to_owned()));
         }
-        key.extend(extra_key);
-        Self { title, overlay, grid, panels, bar, key, frame_cm }
+        Self { title, overlay, grid, panels, bar: None, key, frame_cm }
+    }
+
+    /// With a colour bar (label, low, high) under the maps and `key` entries after the marks'.
+    fn with_bar(mut self, label: &str, lo: f64, hi: f64, key: Vec<(Key, String)>) -> Self {
+        self.bar = Some((label.to_owned(), lo, hi));
+        self.key.extend(key);
+        self
     }
 
     /// The figure's size for `columns` maps side by side, each `map_width` px wide, with x and y at one scale.
@@ -462,10 +462,8 @@ fn signed_panel<'a>(title: String, values: &[Option<f64>], peak: f64) -> MapPane
     }
 }
 
-/// The colour bar of a signed field normalised by its peak.
-fn signed_bar() -> Option<(String, f64, f64)> {
-    Some(("velocity / peak velocity over all instants".to_owned(), -1.0, 1.0))
-}
+/// The colour bar's label of a signed field normalised by its peak (the bar spans -1 to 1).
+const SIGNED_BAR: &str = "velocity / peak velocity over all instants";
 
 /// Focus snapshots (paper, Fig. 5A): the focused field at a few instants, side by side, each `(title, one value
 /// per grid point or None where unmeasured)`, drawn as images on the plate: bilinear interpolation between the
@@ -488,7 +486,7 @@ pub fn focus_snapshots(
     let fields: Vec<&[Option<f64>]> = snapshots.iter().map(|(_, v)| v.as_slice()).collect();
     let peak = peak_magnitude("focus snapshots", grid, &fields)?;
     let panels = snapshots.iter().map(|(title, values)| signed_panel(title.clone(), values, peak)).collect();
-    let figure = Maps::new(title.to_owned(), overlay, *grid, panels, signed_bar(), Vec::new());
+    let figure = Maps::new(title.to_owned(), overlay, *grid, panels).with_bar(SIGNED_BAR, -1.0, 1.0, Vec::new());
     let columns = snapshots.len();
     let size = figure.size(columns, if columns > 3 { 380 } else { 520 });
     save(&figure, dir, name, (size.0.max(900), size.1))
@@ -521,7 +519,7 @@ pub fn focus_animation(
     let mut size = (0, 0);
     for (t_s, values) in frames {
         let panel = signed_panel(format!("t = {:+.1} ms", t_s * 1e3), values, peak);
-        let maps = Maps::new(title.to_owned(), overlay, *grid, vec![panel], signed_bar(), Vec::new());
+        let maps = Maps::new(title.to_owned(), overlay, *grid, vec![panel]).with_bar(SIGNED_BAR, -1.0, 1.0, Vec::new());
         // Small enough that the animation stays near a megabyte: the frames' field is most of its bytes.
         size = maps.size(1, 540);
         size.0 = size.0.max(820);
@@ -580,8 +578,7 @@ pub fn pixel_area_map(
     } else {
         key.push((Key::Fill(WHITE), "not measured".to_owned()));
     }
-    let figure =
-        Maps::new(title.to_owned(), overlay, *grid, panels, Some(("pixel area (cm²)".to_owned(), lo, hi)), key);
+    let figure = Maps::new(title.to_owned(), overlay, *grid, panels).with_bar("pixel area (cm²)", lo, hi, key);
     let size = figure.size(1, 1000);
     save(&figure, dir, name, size)
 }
