@@ -234,19 +234,26 @@ impl<'a> Maps<'a> {
             Resolution::Cells(n) => {
                 let step = (x1 - x0) / n.max(1) as f64;
                 let rows = ((y1 - y0) / step).ceil() as usize;
+                // Runs of equal colour along a row are one rectangle each (fewer SVG elements).
                 let mut cells = Vec::new();
                 for j in 0..rows {
                     let cy = y0 + (j as f64 + 0.5) * step;
                     let crossings = row_crossings(&outline_cm, cy);
-                    for i in 0..n {
-                        let cx = x0 + (i as f64 + 0.5) * step;
-                        if let Some(c) = colour_at(cx, cy, crossings.as_deref()) {
+                    let colours: Vec<Option<RGBColor>> =
+                        (0..n).map(|i| colour_at(x0 + (i as f64 + 0.5) * step, cy, crossings.as_deref())).collect();
+                    let mut start = 0;
+                    for i in 1..=n {
+                        if i < n && colours[i] == colours[start] {
+                            continue;
+                        }
+                        if let Some(c) = colours[start] {
                             let (a, b) = (
-                                (cx - step / 2.0, cy - step / 2.0),
-                                ((cx + step / 2.0).min(x1), (cy + step / 2.0).min(y1)),
+                                (x0 + start as f64 * step, cy - step / 2.0),
+                                ((x0 + i as f64 * step).min(x1), (cy + step / 2.0).min(y1)),
                             );
                             cells.push(Rectangle::new([a, b], c.filled()));
                         }
+                        start = i;
                     }
                 }
                 chart.draw_series(cells).map_err(|e| e.to_string())?;
