@@ -75,7 +75,8 @@ impl LatticeField<'_> {
 
 /// Where the horizontal line at `y` crosses `polygon`'s edges (vertices in order, closed implicitly), x ascending:
 /// `(x, y)` is inside when an odd number of crossings lie right of `x` (the even-odd rule). `None` for a polygon of
-/// fewer than three vertices (no outline known: everything inside). Computed once per row, so that an image's mask costs one pass over the edges per row, not per pixel.
+/// fewer than three vertices (no outline known: everything inside). Computed once per row, so that an image's mask
+/// costs one pass over the edges per row, not per pixel.
 pub(crate) fn row_crossings(polygon: &[(f64, f64)], y: f64) -> Option<Vec<f64>> {
     if polygon.len() < 3 {
         return None;

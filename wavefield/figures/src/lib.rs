@@ -1,5 +1,6 @@
 //! Figures of the paper's analyses, each written as PNG and SVG: wavelength against frequency, focus snapshots (and
-//! the focusing as an animated PNG), the virtual-pixel-area map, POD energy, singular-value energy and condition numbers (plus the driven response).
+//! the focusing as an animated PNG), the virtual-pixel-area map, POD energy, singular-value energy and condition
+//! numbers (plus the driven response).
 //!
 //! Text is set in DejaVu Sans, bundled in the crate (`fonts/`, Bitstream Vera licence) and read by ab_glyph: no
 //! system font, fontconfig or font-kit is ever consulted, so figures look the same on every machine and in CI.
