@@ -12,7 +12,7 @@ use metaplate_analysis::pixel::{PixelAreaMap, PixelAreaOptions, pixel_area_map};
 use metaplate_analysis::report::{PlateReport, ReportOptions, analyse};
 use metaplate_control::PropagationMatrices;
 use metaplate_core::grid::GridSpec;
-use metaplate_core::scene::Scene;
+use metaplate_core::scene::{Outline, Scene};
 use metaplate_figures as figures;
 use metaplate_store::Dataset;
 use serde_json::{Value, json};
@@ -22,6 +22,16 @@ const G_BAND_HZ: (f64, f64) = (50.0, 625.0);
 
 /// Instants of the focus snapshots relative to the focus time, s.
 const SNAPSHOT_TAUS_S: [f64; 5] = [-0.004, -0.002, 0.0, 0.002, 0.004];
+
+/// Frames of the focusing animation: times relative to the focus time from -`ANIMATION_FRAMES / 2` to
+/// +`ANIMATION_FRAMES / 2` steps of `ANIMATION_STEP_S` (most of a 75 Hz period each side of the focus), each shown
+/// `ANIMATION_FRAME_MS`.
+const ANIMATION_FRAMES: i32 = 21;
+const ANIMATION_STEP_S: f64 = 0.001;
+const ANIMATION_FRAME_MS: u16 = 160;
+
+/// Vertices of the outline polygon drawn on the maps (fine enough that a 25 cm plate's edge is off by < 0.1 mm).
+const OUTLINE_VERTICES: usize = 360;
 
 /// Arguments of `metaplate analyze`.
 #[derive(Args)]
@@ -81,14 +91,54 @@ pub fn analyse_dataset(data: &Path, figures: Option<&Path>) -> anyhow::Result<Va
     out["points"] = json!(g.n_points());
     out["actuators"] = json!(g.n_actuators());
     if let Some(dir) = figures {
-        let overlay = scene.as_ref().map_or_else(figures::PlateOverlay::default, |s| figures::PlateOverlay {
-            actuators_m: s.actuators.iter().map(|a| (a.x_m, a.y_m)).collect(),
-            supports_m: s.supports.iter().map(|p| (p.x_m, p.y_m)).collect(),
-        });
+        let overlay = scene.as_ref().map_or_else(figures::PlateOverlay::default, plate_overlay);
         let written = write_figures(dir, &scene_id.name, &g, &report, pixels.as_ref(), &out, &overlay)?;
         out["figures"] = json!(written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
     }
     Ok(out)
+}
+
+/// What the maps draw of `scene`: its outline, resonator rods, actuators and supports.
+fn plate_overlay(scene: &Scene) -> figures::PlateOverlay {
+    figures::PlateOverlay {
+        actuators_m: scene.actuators.iter().map(|a| (a.x_m, a.y_m)).collect(),
+        supports_m: scene.supports.iter().map(|p| (p.x_m, p.y_m)).collect(),
+        outline_m: outline_polygon_m(&scene.plate.outline),
+        // A lattice that cannot be laid (a scene that did not validate) is left undrawn rather than failing figures.
+        resonator_sites_m: scene.resonators.lattice_sites_m(&scene.plate.outline).unwrap_or_default(),
+        focus_m: None,
+    }
+}
+
+/// The outline as a polygon, m: where rays from the centre at [`OUTLINE_VERTICES`] even angles (and through the
+/// bounding box's corners, so a rectangle keeps its corners) cross the edge, found by bisection on the outline's
+/// signed distance. Valid for both built-in shapes: convex and centred on the origin.
+fn outline_polygon_m(outline: &Outline) -> Vec<(f64, f64)> {
+    let (x_min, x_max, y_min, y_max) = outline.bounding_box_m();
+    let reach = x_min.abs().max(x_max).hypot(y_min.abs().max(y_max));
+    if !(reach.is_finite() && reach > 0.0) {
+        return Vec::new();
+    }
+    let mut angles: Vec<f64> =
+        (0..OUTLINE_VERTICES).map(|i| std::f64::consts::TAU * i as f64 / OUTLINE_VERTICES as f64).collect();
+    angles.extend([(x_max, y_max), (x_min, y_max), (x_min, y_min), (x_max, y_min)].map(|(x, y)| {
+        let a = f64::atan2(y, x);
+        if a < 0.0 { a + std::f64::consts::TAU } else { a }
+    }));
+    angles.sort_by(f64::total_cmp);
+    angles
+        .iter()
+        .map(|&a| {
+            let (c, s) = (a.cos(), a.sin());
+            let (mut inside, mut outside) = (0.0, reach);
+            // 50 halvings of at most a few decimetres: far below a nanometre.
+            for _ in 0..50 {
+                let r = 0.5 * (inside + outside);
+                if outline.distance_inside_m(r * c, r * s) >= 0.0 { inside = r } else { outside = r }
+            }
+            (inside * c, inside * s)
+        })
+        .collect()
 }
 
 /// Domain edge as the JSON key, in cm with one decimal ("9.5").
@@ -352,6 +402,8 @@ fn write_figures(
     overlay: &figures::PlateOverlay,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut written = Vec::new();
+    // The animation is one file (APNG, no SVG): kept apart and listed after the maps.
+    let mut animation = None;
     let mut add = |w: figures::Written| written.extend([w.png, w.svg]);
     let lattice = &report.lattice;
     let series = wavelength_series(label, analysis);
@@ -368,32 +420,48 @@ fn write_figures(
         }
         let (x, y) = lattice.grid.position_m(lattice.indices[row] as usize);
         let title = format!(
-            "{label}: focus at ({:.1}, {:.1}) cm, {:.0} to {:.0} Hz, {}{}",
+            "{label}: focus at ({:.1}, {:.1}) cm, {:.0} to {:.0} Hz, {}",
             x * 100.0,
             y * 100.0,
             opts.band.lo_hz,
             opts.band.hi_hz,
             lattice_text(analysis),
-            overlay_key(overlay)
         );
-        add(figures::focus_snapshots(dir, "focus_snapshots", &lattice.grid, &snaps, &title, overlay)?);
+        let overlay = figures::PlateOverlay { focus_m: Some((x, y)), ..overlay.clone() };
+        add(figures::focus_snapshots(dir, "focus_snapshots", &lattice.grid, &snaps, &title, &overlay)?);
+        let mut frames = Vec::new();
+        for step in -(ANIMATION_FRAMES / 2)..=ANIMATION_FRAMES / 2 {
+            let tau = f64::from(step) * ANIMATION_STEP_S;
+            let field = focus_snapshot(g, row, &opts.band, opts.method, tau)?;
+            frames.push((tau, on_grid(&lattice.grid, &lattice.indices, &field)));
+        }
+        animation = Some(figures::focus_animation(
+            dir,
+            "focus_animation",
+            &lattice.grid,
+            &frames,
+            &title,
+            &overlay,
+            ANIMATION_FRAME_MS,
+        )?);
     }
     if let Ok(p) = pixels
         && let Some(median) = p.median_area_cm2()
     {
         let values: Vec<f64> = p.area_cm2.iter().map(|a| a.unwrap_or(f64::NAN)).collect();
         let title = format!(
-            "{label}: virtual-pixel area, median {median:.2} cm² ({} of {} points closed), 75 to 400 Hz, {}{}",
+            "{label}: virtual-pixel area, median {median:.2} cm² ({} of {} points closed), 75 to 400 Hz, {}",
             p.area_cm2.iter().flatten().count(),
             p.area_cm2.len(),
             lattice_text(analysis),
-            overlay_key(overlay)
         );
+        let measured = on_grid(&lattice.grid, &lattice.indices, &vec![0.0; lattice.indices.len()]);
         add(figures::pixel_area_map(
             dir,
             "pixel_area",
             &lattice.grid,
             &on_grid(&lattice.grid, &lattice.indices, &values),
+            &measured.iter().map(Option::is_some).collect::<Vec<_>>(),
             &title,
             overlay,
         )?);
@@ -425,12 +493,8 @@ fn write_figures(
         let points = r.freqs_hz.iter().copied().zip(r.mean_magnitude.iter().copied()).collect();
         add(figures::driven_response(dir, "driven_response", &[figures::Curve { label: label.to_owned(), points }])?);
     }
+    written.extend(animation);
     Ok(written)
-}
-
-/// The key to the overlay's marks, for a map's title ("" without marks).
-fn overlay_key(overlay: &figures::PlateOverlay) -> &'static str {
-    if overlay.actuators_m.is_empty() && overlay.supports_m.is_empty() { "" } else { "; ▲ actuators, ■ supports" }
 }
 
 /// Row of `g` nearest the frame origin (the plate centre); `indices[row]` is that row's index on `grid`.

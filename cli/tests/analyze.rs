@@ -98,6 +98,10 @@ fn analyze_prints_the_paper_quantities_and_writes_figures() {
             assert!(std::fs::metadata(&path).map(|m| m.len() > 1000).unwrap_or(false), "{}", path.display());
         }
     }
+    // The focusing in time: an animated PNG (its acTL chunk), listed with the figures.
+    let animation = std::fs::read(figs.join("focus_animation.png")).unwrap();
+    assert!(animation.windows(4).any(|w| w == b"acTL"), "focus_animation.png is not an APNG");
+    assert!(v["figures"].as_array().unwrap().iter().any(|p| p.as_str().unwrap().ends_with("focus_animation.png")));
 }
 
 #[test]

@@ -68,8 +68,12 @@ pub(crate) const PALETTE: [RGBColor; 6] = [
     RGBColor(90, 90, 90),
 ];
 
-/// Unmeasured grid points.
+/// Unmeasured parts of a map (on the plate where its outline is known).
 pub(crate) const MASKED: RGBColor = RGBColor(225, 225, 225);
+
+/// Measured points without a value (for example no closed half-maximum contour): a dark grey, apart from both
+/// colour maps and from [`MASKED`].
+pub(crate) const NO_VALUE: RGBColor = RGBColor(110, 110, 110);
 
 #[cfg(test)]
 mod tests {

@@ -1,5 +1,6 @@
-//! Figures of the paper's analyses, each written as PNG and SVG: wavelength against frequency, focus snapshots, the
-//! virtual-pixel-area map, POD energy, singular-value energy and condition numbers (plus the driven response).
+//! Figures of the paper's analyses, each written as PNG and SVG: wavelength against frequency, focus snapshots (and
+//! the focusing as an animated PNG), the virtual-pixel-area map, POD energy, singular-value energy and condition
+//! numbers (plus the driven response).
 //!
 //! Text is set in DejaVu Sans, bundled in the crate (`fonts/`, Bitstream Vera licence) and read by ab_glyph: no
 //! system font, fontconfig or font-kit is ever consulted, so figures look the same on every machine and in CI.
@@ -9,6 +10,7 @@
 //! return inline SVG instead.
 
 mod colour;
+mod field;
 mod glyphs;
 mod grid_svg;
 mod maps;
@@ -17,7 +19,7 @@ mod render;
 mod tradeoff;
 
 pub use grid_svg::{CellStatus, snr_map_svg, status_map_svg};
-pub use maps::{PlateOverlay, focus_snapshots, pixel_area_map};
+pub use maps::{PlateOverlay, focus_animation, focus_snapshots, pixel_area_map};
 pub use plots::{
     Curve, SingularValueSeries, WavelengthReferences, WavelengthSeries, condition_numbers, driven_response, pod_energy,
     singular_value_energy, wavelength,

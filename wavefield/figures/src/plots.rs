@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::colour::PALETTE;
-use crate::render::{FONT, Figure, FigureError, Written, axis_range, plain_number, save};
+use crate::render::{FONT, Figure, FigureError, Ticked, Written, axis_range, plain_number, save};
 
 /// One labelled series of points `(x, y)`.
 #[derive(Debug, Clone, PartialEq)]
@@ -137,7 +137,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(80)
-        .build_cartesian_2d(x0..x1, y0..y1)
+        .build_cartesian_2d(x0..x1, if panel.log_y { Ticked::log(y0, y1) } else { Ticked::linear(y0, y1) })
         .map_err(|e| e.to_string())?;
     let log_y = panel.log_y;
     let y_fmt = move |v: &f64| if log_y { plain_number(10f64.powf(*v)) } else { plain_number(*v) };
@@ -421,7 +421,19 @@ pub fn driven_response(dir: &Path, name: &str, series: &[Curve]) -> Result<Writt
 
 #[cfg(test)]
 mod tests {
-    use crate::render::plain_number;
+    use crate::render::{log_ticks, plain_number};
+
+    #[test]
+    fn log_ticks_fall_at_plain_values() {
+        let labels = |lo: f64, hi: f64| -> Vec<String> {
+            log_ticks(lo.log10(), hi.log10()).0.iter().map(|t| plain_number(10f64.powf(*t))).collect()
+        };
+        assert_eq!(labels(3.0, 2500.0), ["5", "10", "20", "50", "100", "200", "500", "1000", "2000"]);
+        assert_eq!(labels(2e-6, 0.5), ["10⁻⁵", "10⁻⁴", "10⁻³", "0.01", "0.1"]);
+        assert_eq!(labels(250.0, 420.0), ["300", "400"]);
+        let (_, grid) = log_ticks(1.0, 2.0);
+        assert_eq!(grid.len(), 10, "1 to 9 x 10 and 100: {grid:?}");
+    }
 
     #[test]
     fn log_axis_labels_are_plain_numbers() {

@@ -7,7 +7,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::colour::PALETTE;
-use crate::render::{FONT, Figure, FigureError, Written, axis_range, save};
+use crate::render::{FONT, Figure, FigureError, Ticked, Written, axis_range, plain_number, save};
 
 /// One protocol's measured trade.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,9 +42,9 @@ impl Figure for Tradeoff<'_> {
             .margin(16)
             .x_label_area_size(45)
             .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, y0..y1)
+            .build_cartesian_2d(Ticked::log(x0, x1), y0..y1)
             .map_err(|e| e.to_string())?;
-        let x_fmt = |v: &f64| format!("{:.0}", 10f64.powf(*v));
+        let x_fmt = |v: &f64| plain_number(10f64.powf(*v));
         chart
             .configure_mesh()
             .x_desc("time per point, s (log scale)")

@@ -8,7 +8,8 @@ use std::path::Path;
 use metaplate_core::grid::GridSpec;
 use metaplate_figures::{
     Curve, FigureError, PlateOverlay, SingularValueSeries, WavelengthReferences, WavelengthSeries, Written,
-    condition_numbers, driven_response, focus_snapshots, pixel_area_map, pod_energy, singular_value_energy, wavelength,
+    condition_numbers, driven_response, focus_animation, focus_snapshots, pixel_area_map, pod_energy,
+    singular_value_energy, wavelength,
 };
 
 const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n";
@@ -103,17 +104,69 @@ fn map_figures_render_to_png_and_svg() {
             .collect()
     };
     let snaps = vec![("t = -1 ms".to_owned(), field(-1.0)), ("t = 0".to_owned(), field(0.0))];
-    let overlay = PlateOverlay { actuators_m: vec![(-0.12, 0.0), (0.12, 0.0)], supports_m: vec![(0.0, 0.05)] };
+    let overlay = overlay();
     check(
         &focus_snapshots(dir.path(), "focus", &grid, &snaps, "focus, 75 to 400 Hz", &overlay).unwrap(),
-        &["x (cm)", "y (cm)", "t = 0", "75 to 400 Hz"],
+        &["x (cm)", "y (cm)", "t = 0", "75 to 400 Hz", "half maximum", "resonator region", "focus target"],
     );
 
     let area: Vec<Option<f64>> = (0..grid.len()).map(|i| (i % 7 != 0).then_some(1.0 + i as f64 / 10.0)).collect();
+    let measured: Vec<bool> = (0..grid.len()).map(|i| i != 3).collect();
     check(
-        &pixel_area_map(dir.path(), "area", &grid, &area, "median 2.7 cm^2", &overlay).unwrap(),
-        &["x (cm)", "pixel area (cm²)", "median 2.7 cm^2"],
+        &pixel_area_map(dir.path(), "area", &grid, &area, &measured, "median 2.7 cm^2", &overlay).unwrap(),
+        &["x (cm)", "pixel area (cm²)", "median 2.7 cm^2", "no closed contour", "off the plate"],
     );
+}
+
+/// A 20 x 12 cm rectangular plate with two actuators, a support, a few rods and a focus at the centre.
+fn overlay() -> PlateOverlay {
+    PlateOverlay {
+        actuators_m: vec![(-0.09, 0.0), (0.09, 0.0)],
+        supports_m: vec![(0.0, 0.05)],
+        outline_m: vec![(-0.1, -0.06), (0.1, -0.06), (0.1, 0.06), (-0.1, 0.06)],
+        resonator_sites_m: (0..15).map(|i| (f64::from(i % 5 - 2) * 0.01, f64::from(i / 5 - 1) * 0.01)).collect(),
+        focus_m: Some((0.0, 0.0)),
+    }
+}
+
+#[test]
+fn the_focus_animation_is_an_apng_of_the_frames_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = GridSpec::centred(9, 5, 0.02);
+    let frames: Vec<(f64, Vec<Option<f64>>)> = (-3..=3)
+        .map(|k| {
+            let t_s = f64::from(k) * 1e-3;
+            let field = (0..grid.len())
+                .map(|i| {
+                    let (x, y) = grid.position_m(i);
+                    Some((-(x * x + y * y) / 1e-3).exp() * (2e3 * t_s + 30.0 * x).cos())
+                })
+                .collect();
+            (t_s, field)
+        })
+        .collect();
+    let path = focus_animation(dir.path(), "anim", &grid, &frames, "focusing", &overlay(), 100).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    assert!(bytes.windows(4).any(|w| w == b"acTL"), "no acTL chunk: not an animated PNG");
+    let mut reader = png::Decoder::new(std::io::Cursor::new(bytes)).read_info().unwrap();
+    let control = reader.info().animation_control().copied().unwrap();
+    assert_eq!(control.num_frames, 7);
+    assert_eq!(control.num_plays, 0, "loops forever");
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let mut decoded = 0;
+    while decoded < 7 {
+        reader.next_frame(&mut buf).unwrap();
+        decoded += 1;
+    }
+    let (w, h) = (reader.info().width, reader.info().height);
+    assert!(w >= 600 && h >= 300, "{w} x {h}");
+    // A time that is not finite is refused before anything is written.
+    let bad = vec![(f64::NAN, frames[0].1.clone())];
+    assert!(matches!(
+        focus_animation(dir.path(), "bad", &grid, &bad, "", &overlay(), 100),
+        Err(FigureError::InvalidData { .. })
+    ));
+    assert!(!dir.path().join("bad.png").exists());
 }
 
 #[test]
@@ -124,11 +177,15 @@ fn unplottable_data_is_a_typed_error() {
     assert!(matches!(condition_numbers(d, "x", "", &nan, &[]), Err(FigureError::Draw { .. })));
     let grid = GridSpec::centred(3, 3, 0.005);
     assert!(matches!(
-        pixel_area_map(d, "x", &grid, &[None; 9], "t", &PlateOverlay::default()),
+        pixel_area_map(d, "x", &grid, &[None; 9], &[true; 9], "t", &PlateOverlay::default()),
         Err(FigureError::InvalidData { .. })
     ));
     assert!(matches!(
-        pixel_area_map(d, "x", &grid, &[Some(1.0); 4], "t", &PlateOverlay::default()),
+        pixel_area_map(d, "x", &grid, &[Some(1.0); 4], &[true; 4], "t", &PlateOverlay::default()),
+        Err(FigureError::InvalidData { .. })
+    ));
+    assert!(matches!(
+        pixel_area_map(d, "x", &grid, &[Some(1.0); 9], &[true; 8], "t", &PlateOverlay::default()),
         Err(FigureError::InvalidData { .. })
     ));
     assert!(matches!(
