@@ -57,11 +57,12 @@ impl Notifier {
     }
 
     fn run(&self, summary: &Value) -> Result<(), String> {
-        let mut child = Command::new("sh")
-            .arg("-c")
-            .arg(&self.command)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::null())
+        let mut command = Command::new("sh");
+        command.arg("-c").arg(&self.command).stdin(Stdio::piped()).stdout(Stdio::null());
+        // Its own process group, so that a timeout kills what the shell started too (`curl`, `mail`), not only sh.
+        #[cfg(unix)]
+        std::os::unix::process::CommandExt::process_group(&mut command, 0);
+        let mut child = command
             .spawn()
             .map_err(|e| format!("cannot start `sh -c {}`: {e}", self.command))?;
         if let Some(mut stdin) = child.stdin.take() {
@@ -75,6 +76,13 @@ impl Notifier {
                 Ok(Some(status)) => return Err(format!("the command exited with {status}")),
                 Ok(None) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(50)),
                 Ok(None) => {
+                    // The group's id is the shell's pid (process_group(0) above); `kill` the command kills it all
+                    // without unsafe code of ours.
+                    #[cfg(unix)]
+                    let _ = Command::new("kill")
+                        .args(["-KILL", "--", &format!("-{}", child.id())])
+                        .stderr(Stdio::null())
+                        .status();
                     let _ = child.kill();
                     let _ = child.wait();
                     return Err(format!("the command ran longer than {:?} and was killed", self.timeout));
