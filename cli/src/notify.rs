@@ -62,9 +62,7 @@ impl Notifier {
         // Its own process group, so that a timeout kills what the shell started too (`curl`, `mail`), not only sh.
         #[cfg(unix)]
         std::os::unix::process::CommandExt::process_group(&mut command, 0);
-        let mut child = command
-            .spawn()
-            .map_err(|e| format!("cannot start `sh -c {}`: {e}", self.command))?;
+        let mut child = command.spawn().map_err(|e| format!("cannot start `sh -c {}`: {e}", self.command))?;
         if let Some(mut stdin) = child.stdin.take() {
             // A command that does not read its input is fine: a broken pipe here is not an error.
             let _ = writeln!(stdin, "{summary}");
