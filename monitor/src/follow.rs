@@ -1,0 +1,130 @@
+//! Following a run directory: the manifest, the journal and the committed files, read the way resume reads them but
+//! never written, locked or moved. A poll rereads the journal only when its size or modification time changed and
+//! reads each newly committed file once.
+
+use std::collections::{HashMap, HashSet};
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+use metaplate_store::journal::{BatchEntry, JournalView};
+use metaplate_store::{Dataset, IrMeta, IrRecord, JOURNAL_FILE, Manifest, ReadOptions, StoreError};
+
+/// What a run directory holds at one poll.
+#[derive(Debug, Clone, Default)]
+pub struct RunFiles {
+    /// The manifest, once the run has written it.
+    pub manifest: Option<Manifest>,
+    /// The journal as last read.
+    pub journal: JournalView,
+    /// The rows of every live file read so far, by file name.
+    pub rows: HashMap<String, Vec<IrMeta>>,
+    /// The rows, responses included, of the most recent commit whose file is live and read.
+    pub last_commit: Option<(u64, Vec<IrRecord>)>,
+    /// Why the last poll could not read something (a file quarantined under it, a manifest being written); retried
+    /// at the next poll.
+    pub problem: Option<String>,
+}
+
+impl RunFiles {
+    /// The rows of every live file read so far.
+    pub fn all_rows(&self) -> impl Iterator<Item = &IrMeta> {
+        self.rows.values().flatten()
+    }
+}
+
+/// Follows one run directory (see the module's documentation).
+#[derive(Debug)]
+pub struct Follower {
+    dir: PathBuf,
+    /// Size and modification time of the journal when last read completely.
+    stamp: Option<(u64, SystemTime)>,
+    files: RunFiles,
+}
+
+impl Follower {
+    /// Follows `dir`, which need not exist yet.
+    pub fn new(dir: impl Into<PathBuf>) -> Self {
+        Self { dir: dir.into(), stamp: None, files: RunFiles::default() }
+    }
+
+    /// The directory followed.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// What the directory held at the last poll.
+    pub fn files(&self) -> &RunFiles {
+        &self.files
+    }
+
+    /// Looks at the directory again; returns whether anything the snapshot shows changed.
+    pub fn poll(&mut self) -> bool {
+        let mut changed = false;
+        if self.files.manifest.is_none() {
+            match Manifest::read(&self.dir) {
+                Ok(manifest) => {
+                    self.files.manifest = Some(manifest);
+                    changed = true;
+                }
+                // Not there yet (or being written): the run has not created its dataset.
+                Err(_) => return changed,
+            }
+        }
+        let stamp = fs::metadata(self.dir.join(JOURNAL_FILE)).ok().and_then(|m| Some((m.len(), m.modified().ok()?)));
+        if stamp.is_none() || stamp == self.stamp {
+            return changed;
+        }
+        match self.read_journal() {
+            Ok(()) => {
+                self.stamp = stamp;
+                self.files.problem = None;
+            }
+            // Left unstamped, so that the next poll tries again.
+            Err(e) => self.files.problem = Some(e.to_string()),
+        }
+        true
+    }
+
+    /// Rereads the journal and reads the live files not read yet; forgets files no longer live.
+    fn read_journal(&mut self) -> Result<(), StoreError> {
+        let Some(view) = metaplate_store::journal::view(&self.dir)? else { return Ok(()) };
+        let live: HashSet<&str> = view.live.iter().map(|b| b.file.as_str()).collect();
+        self.files.rows.retain(|file, _| live.contains(file.as_str()));
+        let mut result = Ok(());
+        for batch in &view.live {
+            if self.files.rows.contains_key(&batch.file) {
+                continue;
+            }
+            match read(&self.dir, batch) {
+                Ok(records) => {
+                    self.files.rows.insert(batch.file.clone(), records.iter().map(|r| r.meta).collect());
+                    let seq = view.commits.iter().find(|c| c.batch.file == batch.file).map(|c| c.seq);
+                    if let Some(seq) = seq
+                        && self.files.last_commit.as_ref().is_none_or(|(last, _)| seq > *last)
+                    {
+                        self.files.last_commit = Some((seq, records));
+                    }
+                }
+                Err(e) => result = Err(e),
+            }
+        }
+        self.files.journal = view;
+        result
+    }
+}
+
+fn read(dir: &Path, batch: &BatchEntry) -> Result<Vec<IrRecord>, StoreError> {
+    Dataset::read_batch(dir, batch, ReadOptions::default())
+}
+
+/// The committed rows, responses included, of grid point `point` (scan) or unit `point` (the point index a
+/// calibration's rows carry), from the live file that holds it; `None` when no live file does.
+///
+/// # Errors
+/// As [`Dataset::read_batch`].
+pub fn point_records(dir: &Path, journal: &JournalView, point: u32) -> Result<Option<Vec<IrRecord>>, StoreError> {
+    let Some(batch) = journal.live.iter().find(|b| b.keys.iter().any(|(p, _)| *p == point)) else { return Ok(None) };
+    let records = read(dir, batch)?;
+    Ok(Some(records.into_iter().filter(|r| r.meta.point_index == point).collect()))
+}
