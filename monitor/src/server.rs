@@ -116,9 +116,14 @@ fn json_response(value: &Value) -> Response {
     (headers, value.to_string()).into_response()
 }
 
-async fn page() -> Response {
+/// Where the page takes the view as it was when it was served, so that its first paint shows the run without waiting
+/// for a fetch.
+const INITIAL_VIEW: &str = "/*INITIAL_VIEW*/null";
+
+async fn page(State(shared): State<Arc<Shared>>) -> Response {
     let mut headers = HeaderMap::new();
     headers.insert(header::CONTENT_TYPE, HeaderValue::from_static("text/html; charset=utf-8"));
+    headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
     // Belt and braces for "self-contained": the browser itself refuses anything but this origin.
     headers.insert(
         header::CONTENT_SECURITY_POLICY,
@@ -126,7 +131,9 @@ async fn page() -> Response {
             "default-src 'none'; connect-src 'self'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src data:",
         ),
     );
-    (headers, PAGE).into_response()
+    // Inside a script element, `</` would end it: JSON allows `<\/` for it.
+    let view = view(&shared).to_string().replace("</", "<\\/");
+    (headers, PAGE.replacen(INITIAL_VIEW, &view, 1)).into_response()
 }
 
 async fn api_state(State(shared): State<Arc<Shared>>) -> Response {
@@ -134,19 +141,23 @@ async fn api_state(State(shared): State<Arc<Shared>>) -> Response {
 }
 
 /// What the page draws: the snapshot, the maps, the last point's spectra and the log's tail.
-async fn api_view(State(shared): State<Arc<Shared>>) -> Response {
+fn view(shared: &Shared) -> Value {
     let (files, dir) = (shared.files(), shared.dir());
     let snapshot = state::snapshot(&files, &dir, chrono::Utc::now());
     let maps = state::maps_svg(&files, MAP_WIDTH_PX, SNR_SCALE_DB);
     let recipe = files.manifest.as_ref().map_or("", |m| m.meta.recipe.as_str());
-    json_response(&json!({
+    json!({
         "state": snapshot,
         "status_svg": maps.as_ref().map(|m| &m.0),
         "snr_svg": maps.as_ref().map(|m| &m.1),
         "snr_scale_db": [SNR_SCALE_DB.0, SNR_SCALE_DB.1],
         "spectrum": files.last_commit.as_ref().map(|(_, records)| state::spectra(records)),
         "log_tail": state::log_tail(&dir, recipe),
-    }))
+    })
+}
+
+async fn api_view(State(shared): State<Arc<Shared>>) -> Response {
+    json_response(&view(&shared))
 }
 
 /// One point's rows: status, SNR, retries, time and the impulse response of each actuator.

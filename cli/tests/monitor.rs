@@ -1,0 +1,332 @@
+//! `metaplate monitor` over HTTP, as a script or a browser sees it: a finished scan, a scan followed from before its
+//! dataset exists to its end (events, reconnection with `Last-Event-ID`), the Host and method guard, and the page in
+//! headless Chromium while a scan runs (Debian's `chromium`, installed by `scripts/install-deps.sh`; another binary
+//! through `METAPLATE_CHROMIUM`).
+
+// Helpers outside #[test] functions unwrap too: a failure there is a failed test.
+#![allow(clippy::unwrap_used)]
+
+use std::collections::HashSet;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+/// The scan of `recipes.rs` (3 x 2 points of the metamaterial plate, the quick protocol, seed 5), so that the
+/// files share one Green's-function cache entry.
+const SCAN: &[&str] = &["--scene", "metamaterial", "--protocol", "quick", "--grid", "3x2", "--seed", "5"];
+
+fn cache_dir() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache")
+}
+
+/// `metaplate scan` into `out`, started (not waited for).
+fn start_scan(out: &Path) -> Child {
+    let cache = cache_dir();
+    Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["scan", "--uncalibrated", "--out", out.to_str().unwrap(), "--cache-dir", cache.to_str().unwrap()])
+        .args(SCAN)
+        .env("RUST_BACKTRACE", "0")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+fn wait_ok(child: Child) {
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "scan failed: {}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// A monitor process on a free loopback port, killed when dropped.
+struct Monitor {
+    child: Child,
+    port: u16,
+}
+
+impl Monitor {
+    fn start(dir: &Path) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+            .args(["monitor", dir.to_str().unwrap(), "--bind", "127.0.0.1:0"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+        // "monitor: http://127.0.0.1:PORT/ following ..."
+        let port = line.split("127.0.0.1:").nth(1).and_then(|r| r.split('/').next()).map(|p| p.parse().unwrap());
+        Self { port: port.unwrap_or_else(|| panic!("no address in {line:?}")), child }
+    }
+
+    /// One request with `Host: 127.0.0.1:PORT` unless `host` says otherwise; returns the status and the body.
+    fn request(&self, method: &str, path: &str, host: Option<&str>) -> (u16, String) {
+        let host = host.map_or_else(|| format!("127.0.0.1:{}", self.port), str::to_owned);
+        let mut stream = TcpStream::connect(("127.0.0.1", self.port)).unwrap();
+        write!(stream, "{method} {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\nContent-Length: 0\r\n\r\n")
+            .unwrap();
+        let mut response = String::new();
+        stream.read_to_string(&mut response).unwrap();
+        let status = response.split(' ').nth(1).and_then(|s| s.parse().ok()).unwrap_or(0);
+        let body = response.split_once("\r\n\r\n").map_or("", |(_, b)| b).to_owned();
+        (status, body)
+    }
+
+    fn get_json(&self, path: &str) -> Value {
+        let (status, body) = self.request("GET", path, None);
+        assert_eq!(status, 200, "{path}: {body}");
+        serde_json::from_str(&body).unwrap()
+    }
+
+    /// Opens `/events` (with `Last-Event-ID` if given).
+    fn events(&self, last_event_id: Option<u64>) -> Events {
+        let mut stream = TcpStream::connect(("127.0.0.1", self.port)).unwrap();
+        let resume = last_event_id.map_or_else(String::new, |id| format!("Last-Event-ID: {id}\r\n"));
+        write!(
+            stream,
+            "GET /events HTTP/1.1\r\nHost: localhost:{}\r\nAccept: text/event-stream\r\n{resume}\r\n",
+            self.port
+        )
+        .unwrap();
+        stream.set_read_timeout(Some(Duration::from_millis(200))).unwrap();
+        Events { reader: BufReader::new(stream), id: None, event: None }
+    }
+
+    /// Polls `/api/state` until `done` says yes (at most 120 s: the first run may fill the cache).
+    fn wait_state(&self, done: impl Fn(&Value) -> bool) -> Value {
+        let start = Instant::now();
+        loop {
+            let state = self.get_json("/api/state");
+            if done(&state) {
+                return state;
+            }
+            assert!(start.elapsed() < Duration::from_secs(120), "timed out; last state {state}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+impl Drop for Monitor {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A server-sent event stream, read line by line (chunked transfer framing lines are skipped: they are not fields).
+struct Events {
+    reader: BufReader<TcpStream>,
+    id: Option<u64>,
+    event: Option<String>,
+}
+
+/// One `commit` event: its id, its data and when it arrived.
+struct Commit {
+    id: u64,
+    data: Value,
+    arrived: chrono::DateTime<chrono::Utc>,
+}
+
+impl Events {
+    /// The next `commit` event, or `None` if none comes within `timeout`.
+    fn next_commit(&mut self, timeout: Duration) -> Option<Commit> {
+        let start = Instant::now();
+        let mut line = String::new();
+        while start.elapsed() < timeout {
+            line.clear();
+            match self.reader.read_line(&mut line) {
+                Ok(0) => return None,
+                Ok(_) => {}
+                Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {
+                    continue;
+                }
+                Err(e) => panic!("{e}"),
+            }
+            let line = line.trim_end();
+            if let Some(id) = line.strip_prefix("id: ") {
+                self.id = id.parse().ok();
+            } else if let Some(event) = line.strip_prefix("event: ") {
+                self.event = Some(event.to_owned());
+            } else if let Some(data) = line.strip_prefix("data: ")
+                && self.event.as_deref() == Some("commit")
+            {
+                let data = serde_json::from_str(data).unwrap();
+                let id = self.id.take().unwrap();
+                return Some(Commit { id, data, arrived: chrono::Utc::now() });
+            }
+        }
+        None
+    }
+}
+
+#[test]
+fn a_finished_scan_is_served_read_only_and_to_loopback_names_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scan = tmp.path().join("scan");
+    wait_ok(start_scan(&scan));
+    let monitor = Monitor::start(&scan);
+
+    let state = monitor.get_json("/api/state");
+    assert_eq!(state["status"], "finished", "{state}");
+    assert_eq!((state["points_total"].as_u64(), state["points_done"].as_u64()), (Some(6), Some(6)), "{state}");
+    assert_eq!(state["status_counts"]["pending"], 0, "{state}");
+    let counted: u64 = state["status_counts"].as_object().unwrap().values().filter_map(Value::as_u64).sum();
+    assert_eq!(counted, 6, "{state}");
+    assert_eq!(state["remaining_s"]["median"].as_f64(), Some(0.0), "{state}");
+    assert!(state["elapsed_s"].as_f64().unwrap() > 0.0 && state["last_commit_age_s"].as_f64().is_some(), "{state}");
+    assert!(state["disk"]["free_bytes"].as_u64().unwrap() > 0, "{state}");
+    assert_eq!(state["stalled"], false);
+
+    // One point: every actuator's row, with its response.
+    let manifest: Value = serde_json::from_str(&std::fs::read_to_string(scan.join("manifest.json")).unwrap()).unwrap();
+    let point = manifest["config"]["points"][0].as_u64().unwrap();
+    let one = monitor.get_json(&format!("/api/point/{point}"));
+    assert_eq!(one["point"].as_u64(), Some(point));
+    let rows = one["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 8, "{}", one["status"]);
+    assert!(rows.iter().all(|r| r["ir"].as_array().is_some_and(|ir| ir.len() == 12_000)));
+    assert_eq!(monitor.request("GET", "/api/point/0", None).0, 404, "a point not measured");
+
+    // The page: self-contained (nothing fetched but its own API).
+    let (status, page) = monitor.request("GET", "/", None);
+    assert_eq!(status, 200);
+    for outside in
+        ["<script src", "<link", "@import", "url(", "src=\"http", "href=\"http", "(\"http", "('http", "//fonts"]
+    {
+        assert!(!page.contains(outside), "the page fetches something from outside ({outside})");
+    }
+    assert_eq!(monitor.request("HEAD", "/", None).0, 200);
+
+    // Nothing changes anything; only loopback names are served (DNS rebinding).
+    for method in ["POST", "PUT", "DELETE", "PATCH"] {
+        assert_eq!(monitor.request(method, "/api/state", None).0, 405, "{method}");
+    }
+    assert_eq!(monitor.request("POST", "/no/such/page", None).0, 405);
+    for host in ["evil.example", "evil.example:80", "127.0.0.1.evil.example", "10.0.0.1", "[::2]:80"] {
+        assert_eq!(monitor.request("GET", "/api/state", Some(host)).0, 403, "{host}");
+    }
+    for host in ["localhost", "LOCALHOST:8765", "127.0.0.1", "[::1]:1234", "monitor.localhost"] {
+        assert_eq!(monitor.request("GET", "/api/state", Some(host)).0, 200, "{host}");
+    }
+
+    // A reconnecting client gets what it missed, in order.
+    let mut events = monitor.events(Some(2));
+    let ids: Vec<u64> =
+        std::iter::from_fn(|| events.next_commit(Duration::from_secs(5)).map(|c| c.id)).take(3).collect();
+    assert_eq!(ids, [3, 4, 5]);
+}
+
+#[test]
+fn a_scan_is_followed_from_before_its_dataset_exists_to_its_end_with_an_event_per_commit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scan = tmp.path().join("scan");
+    let monitor = Monitor::start(&scan);
+    assert_eq!(monitor.get_json("/api/state")["status"], "waiting");
+    let mut events = monitor.events(None);
+    let run = start_scan(&scan);
+
+    let first = events.next_commit(Duration::from_secs(120)).expect("a commit event");
+    assert_eq!((first.id, &first.data["seq"]), (0, &Value::from(0)));
+    let mut latencies_s = Vec::new();
+    let mut ids = vec![first.id];
+    let mut seen = vec![first];
+    // Disconnect after the third commit and come back with the last id seen: nothing is lost or repeated.
+    while ids.len() < 3 {
+        let commit = events.next_commit(Duration::from_secs(30)).expect("a commit event");
+        ids.push(commit.id);
+        seen.push(commit);
+    }
+    drop(events);
+    let mut events = monitor.events(Some(*ids.last().unwrap()));
+    while let Some(commit) = events.next_commit(Duration::from_secs(30)) {
+        ids.push(commit.id);
+        seen.push(commit);
+        if ids.len() == 6 {
+            break;
+        }
+    }
+    assert_eq!(ids, [0, 1, 2, 3, 4, 5]);
+    wait_ok(run);
+    for commit in &seen[..3] {
+        let at = chrono::DateTime::parse_from_rfc3339(commit.data["at"].as_str().unwrap()).unwrap();
+        latencies_s.push((commit.arrived - at.with_timezone(&chrono::Utc)).as_seconds_f64());
+    }
+    // Live events (the ones before the reconnection) arrive within a second of the commit.
+    assert!(latencies_s.iter().all(|l| *l < 1.0), "latencies {latencies_s:?} s");
+    let points: HashSet<u64> = seen.iter().filter_map(|c| c.data["point"].as_u64()).collect();
+    assert_eq!(points.len(), 6);
+    assert!(seen.iter().all(|c| c.data["status"].is_string()), "every commit carries its point's status");
+
+    let state = monitor.wait_state(|s| s["status"] == "finished");
+    assert_eq!(state["points_done"].as_u64(), Some(6));
+    assert!(state["median_point_s"].as_f64().unwrap() > 0.0, "{state}");
+}
+
+fn chromium() -> PathBuf {
+    let path = std::env::var_os("METAPLATE_CHROMIUM").map_or_else(|| PathBuf::from("chromium"), PathBuf::from);
+    let found = Command::new(&path).arg("--version").output().is_ok_and(|o| o.status.success());
+    assert!(
+        found,
+        "headless Chromium is needed to render the monitor: `bash scripts/install-deps.sh` installs Debian's \
+         chromium (or point METAPLATE_CHROMIUM at one)"
+    );
+    path
+}
+
+/// A screenshot of `url` in headless Chromium, `width` x `height` px, decoded as RGB(A) pixels.
+fn screenshot(url: &str, png: &Path, width: u32, height: u32) -> (png::OutputInfo, Vec<u8>) {
+    let profile = tempfile::tempdir().unwrap();
+    let out = Command::new(chromium())
+        // As root (CI) Chromium needs --no-sandbox; the rest keeps it off this machine's closed network.
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--hide-scrollbars"])
+        .args(["--disable-background-networking", "--disable-component-update", "--disable-sync"])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg(format!("--window-size={width},{height}"))
+        .arg(format!("--screenshot={}", png.display()))
+        .arg(url)
+        .output()
+        .unwrap();
+    assert!(out.status.success() && png.exists(), "chromium failed: {}", String::from_utf8_lossy(&out.stderr));
+    let decoder = png::Decoder::new(BufReader::new(std::fs::File::open(png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut pixels).unwrap();
+    pixels.truncate(info.buffer_size());
+    (info, pixels)
+}
+
+#[test]
+fn the_page_renders_the_grid_the_snr_map_and_the_spectra_in_chromium_while_a_scan_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scan = tmp.path().join("scan");
+    let monitor = Monitor::start(&scan);
+    let run = start_scan(&scan);
+    // The page is opened once the first point is in, while the run goes on.
+    monitor.wait_state(|s| s["points_done"].as_u64().is_some_and(|n| n >= 1));
+    let png = tmp.path().join("monitor.png");
+    let (info, pixels) = screenshot(&format!("http://localhost:{}/", monitor.port), &png, 1400, 1000);
+    wait_ok(run);
+    let colours: HashSet<[u8; 3]> =
+        pixels.chunks_exact(info.color_type.samples()).map(|p| [p[0], p[1], p[2]]).collect();
+    // The status map's measured green, the spectrum's first two actuators' colours, and SNR cells (viridis, not in
+    // the colour bar's few steps alone: any of its yellows and greens) are drawn.
+    for (what, rgb) in
+        [("measured cells", [0x00, 0x9e, 0x73]), ("spectrum", [0x00, 0x72, 0xb2]), ("spectrum", [0xd5, 0x5e, 0x00])]
+    {
+        assert!(colours.contains(&rgb), "no {what} ({rgb:02x?}) in the screenshot");
+    }
+    // What the page shows as text, after its script ran: progress and a remaining time or the end.
+    let profile = tempfile::tempdir().unwrap();
+    let dom = Command::new(chromium())
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .args(["--dump-dom", &format!("http://localhost:{}/", monitor.port)])
+        .output()
+        .unwrap();
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    assert!(dom.contains("6 / 6 points"), "the page shows the progress: {dom}");
+    assert!(dom.contains("<svg") && dom.contains("act 7"), "maps and spectra: {dom}");
+}
