@@ -23,12 +23,15 @@ fn cache_dir() -> PathBuf {
     Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache")
 }
 
-/// `metaplate scan` into `out`, started (not waited for).
-fn start_scan(out: &Path) -> Child {
+/// `metaplate scan` into `out` (resuming with `resume`), started (not waited for), each commit made to last
+/// `commit_pause_ms` longer (the store's test hook) so that a person (or a test) can watch a run of a few seconds.
+fn start_scan(out: &Path, resume: bool, commit_pause_ms: u64) -> Child {
     let cache = cache_dir();
     Command::new(env!("CARGO_BIN_EXE_metaplate"))
         .args(["scan", "--uncalibrated", "--out", out.to_str().unwrap(), "--cache-dir", cache.to_str().unwrap()])
         .args(SCAN)
+        .args(resume.then_some("--resume"))
+        .env("METAPLATE_TEST_COMMIT_PAUSE_MS", commit_pause_ms.to_string())
         .env("RUST_BACKTRACE", "0")
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -166,7 +169,7 @@ impl Events {
 fn a_finished_scan_is_served_read_only_and_to_loopback_names_only() {
     let tmp = tempfile::tempdir().unwrap();
     let scan = tmp.path().join("scan");
-    wait_ok(start_scan(&scan));
+    wait_ok(start_scan(&scan, false, 0));
     let monitor = Monitor::start(&scan);
 
     let state = monitor.get_json("/api/state");
@@ -226,7 +229,7 @@ fn a_scan_is_followed_from_before_its_dataset_exists_to_its_end_with_an_event_pe
     let monitor = Monitor::start(&scan);
     assert_eq!(monitor.get_json("/api/state")["status"], "waiting");
     let mut events = monitor.events(None);
-    let run = start_scan(&scan);
+    let run = start_scan(&scan, false, 0);
 
     let first = events.next_commit(Duration::from_secs(120)).expect("a commit event");
     assert_eq!((first.id, &first.data["seq"]), (0, &Value::from(0)));
@@ -263,6 +266,29 @@ fn a_scan_is_followed_from_before_its_dataset_exists_to_its_end_with_an_event_pe
     let state = monitor.wait_state(|s| s["status"] == "finished");
     assert_eq!(state["points_done"].as_u64(), Some(6));
     assert!(state["median_point_s"].as_f64().unwrap() > 0.0, "{state}");
+}
+
+#[test]
+fn a_killed_scan_shows_where_it_stopped_and_its_resume_is_followed_to_the_end() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scan = tmp.path().join("scan");
+    let monitor = Monitor::start(&scan);
+    let mut run = start_scan(&scan, false, 300);
+    monitor.wait_state(|s| s["points_done"].as_u64().is_some_and(|n| n >= 2));
+    run.kill().unwrap();
+    run.wait().unwrap();
+    std::thread::sleep(2 * Duration::from_millis(250));
+    let killed = monitor.get_json("/api/state");
+    let done = killed["points_done"].as_u64().unwrap();
+    assert!((2..6).contains(&done), "{killed}");
+    assert_eq!(killed["status_counts"]["pending"].as_u64(), Some(6 - done), "{killed}");
+    assert!(killed["status"] == "running" || killed["status"] == "stalled", "{killed}");
+    assert!(killed["remaining_s"]["p90"].as_f64().unwrap() >= killed["remaining_s"]["median"].as_f64().unwrap());
+    assert!(killed["finish_at"]["median"].is_string(), "{killed}");
+
+    wait_ok(start_scan(&scan, true, 0));
+    let state = monitor.wait_state(|s| s["status"] == "finished");
+    assert_eq!(state["points_done"].as_u64(), Some(6), "{state}");
 }
 
 fn chromium() -> PathBuf {
@@ -303,7 +329,7 @@ fn the_page_renders_the_grid_the_snr_map_and_the_spectra_in_chromium_while_a_sca
     let tmp = tempfile::tempdir().unwrap();
     let scan = tmp.path().join("scan");
     let monitor = Monitor::start(&scan);
-    let run = start_scan(&scan);
+    let run = start_scan(&scan, false, 300);
     // The page is opened once the first point is in, while the run goes on.
     monitor.wait_state(|s| s["points_done"].as_u64().is_some_and(|n| n >= 1));
     let png = tmp.path().join("monitor.png");

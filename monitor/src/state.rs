@@ -113,20 +113,19 @@ pub fn log_tail(dir: &Path, recipe: &str) -> String {
     }
 }
 
-/// How the run's own log says it last ended, if it did since it last started: `finished`, `stopped` or `failed`.
-fn logged_end(log: &str) -> Option<&'static str> {
+/// How the run's own log says it last ended, if it did since it last started: `finished` or `stopped`, with the
+/// number of units the run had committed then (its `done=N`).
+fn logged_end(log: &str) -> Option<(&'static str, Option<usize>)> {
     let line = log.lines().rev().find(|l| {
         l.contains("metaplate::run:") && (l.contains(" started") || l.contains(" finished") || l.contains("stopped"))
-            || l.contains(" ERROR ")
     })?;
-    if line.contains(" ERROR ") {
-        Some("failed")
-    } else if line.contains(" finished") {
-        Some("finished")
-    } else if line.contains("stopped") {
-        Some("stopped")
-    } else {
+    let done = line.split_whitespace().find_map(|w| w.strip_prefix("done=")).and_then(|n| n.parse().ok());
+    if line.contains(" started") {
         None
+    } else if line.contains(" finished") {
+        Some(("finished", done))
+    } else {
+        Some(("stopped", done))
     }
 }
 
@@ -183,7 +182,9 @@ pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
     let remaining = remaining_estimate_s(&durations, total - done);
     let last_s = commit_s.last().copied().or(created_s);
     let log = log_tail(dir, &meta.recipe);
-    let status = if done >= total && total > 0 { Some("finished") } else { logged_end(&log) };
+    // The log is read now and the journal at the last poll: an end the journal does not show yet is not taken.
+    let logged = logged_end(&log).filter(|(_, logged_done)| logged_done.is_none_or(|n| n <= done)).map(|(end, _)| end);
+    let status = if done >= total && total > 0 { Some("finished") } else { logged };
     let end_s = if status == Some("finished") { last_s } else { Some(now_s) };
     let elapsed_s = match (created_s, end_s) {
         (Some(a), Some(b)) => (b - a).max(0.0),
@@ -317,11 +318,10 @@ mod tests {
     fn the_log_says_how_the_run_last_ended() {
         let started = "2026-01-01T00:00:00Z  INFO metaplate::run: scan started total=6 done=0\n";
         assert_eq!(logged_end(started), None);
-        assert_eq!(logged_end(&format!("{started}x  INFO metaplate::run: finished done=6\n")), Some("finished"));
-        assert_eq!(
-            logged_end(&format!("{started}x  INFO metaplate::run: stopped on request done=2\n")),
-            Some("stopped")
-        );
+        let finished = format!("{started}x  INFO metaplate::run: finished done=6\n");
+        assert_eq!(logged_end(&finished), Some(("finished", Some(6))));
+        let stopped = format!("{started}x  INFO metaplate::run: stopped on request done=2\n");
+        assert_eq!(logged_end(&stopped), Some(("stopped", Some(2))));
         let resumed = format!("{started}x  INFO metaplate::run: stopped on request done=2\n{started}");
         assert_eq!(logged_end(&resumed), None);
     }
