@@ -22,7 +22,7 @@ use crate::state;
 /// The page, with its script and style inline: nothing else is fetched but this server's API.
 const PAGE: &str = include_str!("page.html");
 /// Width of the maps on the page, px.
-const MAP_WIDTH_PX: usize = 440;
+const MAP_WIDTH_PX: usize = 480;
 /// How often the follower looks at the run directory: the page updates within a second of a commit.
 pub const POLL_INTERVAL: Duration = Duration::from_millis(250);
 /// How often an idle event stream sends a comment, so that proxies and `ssh -L` tunnels keep it open.
