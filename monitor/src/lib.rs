@@ -87,11 +87,12 @@ pub fn serve(
     let mut follower = follow::Follower::new(run_dir);
     follower.poll();
     let (changes, _) = tokio::sync::watch::channel(0);
-    let shared = Arc::new(server::Shared { follower: RwLock::new(follower), changes });
+    let files = RwLock::new(Arc::new(follower.files().clone()));
+    let shared = Arc::new(server::Shared { dir: follower.dir().to_path_buf(), files, changes });
     let follower_share = Arc::clone(&shared);
     std::thread::Builder::new()
         .name("monitor-follow".into())
-        .spawn(move || server::follow(&follower_share))
+        .spawn(move || server::follow(follower, &follower_share))
         .map_err(|source| MonitorError::Io { op: "starting the follower thread", source })?;
     runtime.block_on(async move {
         let listener = tokio::net::TcpListener::bind(bind)

@@ -1,6 +1,7 @@
 //! The HTTP side: routes, the Host and method guard, server-sent events.
 
 use std::convert::Infallible;
+use std::path::PathBuf;
 use std::sync::{Arc, PoisonError, RwLock};
 use std::time::Duration;
 
@@ -28,29 +29,31 @@ pub const POLL_INTERVAL: Duration = Duration::from_millis(250);
 /// How often an idle event stream sends a comment, so that proxies and `ssh -L` tunnels keep it open.
 pub const KEEP_ALIVE: Duration = Duration::from_secs(10);
 
-/// What the handlers share: the follower's last reading and a counter bumped at each change.
+/// What the handlers share: the follower's last reading (replaced whole after each change, so that a request never
+/// waits for a poll reading a file from a slow disk) and a counter bumped at each change.
 pub(crate) struct Shared {
-    pub(crate) follower: RwLock<Follower>,
+    pub(crate) dir: PathBuf,
+    pub(crate) files: RwLock<Arc<RunFiles>>,
     pub(crate) changes: watch::Sender<u64>,
 }
 
 impl Shared {
-    fn files(&self) -> RunFiles {
-        self.follower.read().unwrap_or_else(PoisonError::into_inner).files().clone()
+    fn files(&self) -> Arc<RunFiles> {
+        Arc::clone(&self.files.read().unwrap_or_else(PoisonError::into_inner))
     }
 
-    fn dir(&self) -> std::path::PathBuf {
-        self.follower.read().unwrap_or_else(PoisonError::into_inner).dir().to_path_buf()
+    fn dir(&self) -> PathBuf {
+        self.dir.clone()
     }
 }
 
-/// Polls the run directory every [`POLL_INTERVAL`] until the server ends, bumping `changes` at each change. Runs on
-/// its own thread: file reads are blocking and must not hold up the server.
-/// Ends once the server has dropped its share.
-pub(crate) fn follow(shared: &Arc<Shared>) {
+/// Polls the run directory with `follower` every [`POLL_INTERVAL`] and publishes each change in `shared`. Runs on
+/// its own thread (file reads are blocking and must not hold up the server); ends once the server has dropped its
+/// share.
+pub(crate) fn follow(mut follower: Follower, shared: &Arc<Shared>) {
     while Arc::strong_count(shared) > 1 {
-        let changed = shared.follower.write().unwrap_or_else(PoisonError::into_inner).poll();
-        if changed {
+        if follower.poll() {
+            *shared.files.write().unwrap_or_else(PoisonError::into_inner) = Arc::new(follower.files().clone());
             shared.changes.send_modify(|n| *n += 1);
         }
         std::thread::sleep(POLL_INTERVAL);
@@ -229,4 +232,38 @@ async fn events(
         },
     );
     Sse::new(stream).keep_alive(KeepAlive::new().interval(KEEP_ALIVE))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_loopback_names_pass_the_host_check() {
+        for host in [
+            "localhost",
+            "localhost:8765",
+            "LocalHost",
+            "a.localhost:1",
+            "127.0.0.1",
+            "127.1.2.3:80",
+            "[::1]",
+            "[::1]:8765",
+        ] {
+            assert!(is_loopback_host(host), "{host}");
+        }
+        for host in [
+            "",
+            "evil.example",
+            "localhost.evil.example",
+            "127.0.0.1.nip.io",
+            "10.0.0.1:8765",
+            "[::2]",
+            "[::1",
+            "[::1]x",
+            "0.0.0.0",
+        ] {
+            assert!(!is_loopback_host(host), "{host}");
+        }
+    }
 }
