@@ -291,6 +291,30 @@ fn a_killed_scan_shows_where_it_stopped_and_its_resume_is_followed_to_the_end() 
     assert_eq!(state["points_done"].as_u64(), Some(6), "{state}");
 }
 
+#[test]
+fn a_calibration_is_followed_actuator_by_actuator() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cal = tmp.path().join("cal");
+    let cache = cache_dir();
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()])
+        .args(["--cache-dir", cache.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let monitor = Monitor::start(&cal);
+    let state = monitor.get_json("/api/state");
+    assert_eq!((state["unit"].as_str(), state["status"].as_str()), (Some("actuator"), Some("finished")), "{state}");
+    assert_eq!((state["points_total"].as_u64(), state["points_done"].as_u64()), (Some(8), Some(8)), "{state}");
+    let view = monitor.get_json("/api/view");
+    assert!(view["status_svg"].is_null(), "a calibration has no grid to draw");
+    let kinds: Vec<&str> =
+        view["spectrum"]["actuators"].as_array().unwrap().iter().filter_map(|a| a["kind"].as_str()).collect();
+    assert_eq!(kinds.len(), 3, "the last actuator's filter, response and verification: {kinds:?}");
+    let last = monitor.events(Some(6)).next_commit(Duration::from_secs(5)).unwrap();
+    assert_eq!((last.id, last.data["actuator"].as_u64()), (7, Some(7)), "{}", last.data);
+}
+
 fn chromium() -> PathBuf {
     let path = std::env::var_os("METAPLATE_CHROMIUM").map_or_else(|| PathBuf::from("chromium"), PathBuf::from);
     let found = Command::new(&path).arg("--version").output().is_ok_and(|o| o.status.success());

@@ -28,7 +28,7 @@
 //! - `/api/point/N`: grid point N's committed rows (actuator, status, SNR, retries, time, impulse response) and its
 //!   worst status; 404 while it is not committed.
 //! - `/events`: server-sent events, one `commit` per journal commit with `id` its sequence number and data
-//!   `{seq, at, file, point, rows, status, snr_db}`; `Last-Event-ID: N` replays the commits after N; a comment
+//!   `{seq, at, file, point (a calibration: actuator), rows, status, snr_db}`; `Last-Event-ID: N` replays the commits after N; a comment
 //!   every [`server::KEEP_ALIVE`] keeps an idle stream open.
 
 pub mod cells;

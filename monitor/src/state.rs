@@ -34,6 +34,21 @@ enum Units {
 }
 
 impl Units {
+    /// The units of a run with configuration `config`, and how many it plans.
+    fn of_config(config: &serde_json::Map<String, Value>) -> (Units, usize) {
+        match config.get("actuator_sites_m").and_then(Value::as_array) {
+            Some(sites) => (Units::Actuators, sites.len()),
+            None => (Units::Points, planned_points(config).len()),
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Units::Points => "point",
+            Units::Actuators => "actuator",
+        }
+    }
+
     fn of_row(self, meta: &IrMeta) -> u32 {
         match self {
             Units::Points => meta.point_index,
@@ -153,10 +168,7 @@ pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
         });
     };
     let meta = &manifest.meta;
-    let (units, total) = match meta.config.get("actuator_sites_m").and_then(Value::as_array) {
-        Some(sites) => (Units::Actuators, sites.len()),
-        None => (Units::Points, planned_points(&meta.config).len()),
-    };
+    let (units, total) = Units::of_config(&meta.config);
     let cells = unit_cells(units, files.all_rows());
     let done = cells.len();
     let total = total.max(done);
@@ -202,7 +214,7 @@ pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
     json!({
         "dir": dir.display().to_string(),
         "recipe": meta.recipe,
-        "unit": match units { Units::Points => "point", Units::Actuators => "actuator" },
+        "unit": units.name(),
         "status": status,
         "points_total": total,
         "points_done": done,
@@ -230,17 +242,21 @@ pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
     })
 }
 
-/// The event `/events` sends for `commit`: its sequence number, time, unit and (while its file holds the dataset)
-/// status and lowest SNR.
+/// The event `/events` sends for `commit`: its sequence number, time, unit (`point`: the grid index, or
+/// `actuator`) and (while its file holds the dataset) the unit's status and lowest SNR.
 pub fn commit_event(files: &RunFiles, commit: &JournalCommit) -> Value {
-    let point = commit.batch.keys.first().map(|k| k.0);
+    let units = files.manifest.as_ref().map_or(Units::Points, |m| Units::of_config(&m.meta.config).0);
+    let unit = commit.batch.keys.first().map(|&(point, actuator)| match units {
+        Units::Points => point,
+        Units::Actuators => u32::from(actuator),
+    });
     let rows = files.rows.get(&commit.batch.file);
-    let cell = rows.and_then(|rows| unit_cells(Units::Points, rows.iter()).into_values().next());
+    let cell = rows.and_then(|rows| unit_cells(units, rows.iter()).into_values().next());
     json!({
         "seq": commit.seq,
         "at": commit.at,
         "file": commit.batch.file,
-        "point": point,
+        units.name(): unit,
         "rows": commit.batch.rows,
         "status": cell.map(|c| c.0.label()),
         "snr_db": cell.and_then(|c| c.1),
@@ -266,7 +282,7 @@ const SPECTRUM_BAND_HZ: (f64, f64) = (20.0, 2000.0);
 /// Points per actuator of the spectrum plot.
 const SPECTRUM_POINTS: usize = 240;
 
-/// The magnitude spectra, dB (re 1), of `records` (one per actuator) on log-spaced frequencies: the largest bin in
+/// The magnitude spectra, dB (re 1), of `records` (one per actuator; a calibration's rows carry their `kind`) on log-spaced frequencies: the largest bin in
 /// each frequency's interval, so that narrow resonances are not lost. `{"freq_hz": [...], "actuators": [{"actuator",
 /// "db": [...]}]}`; a response that cannot be transformed (non-finite samples) is left out.
 pub fn spectra(records: &[IrRecord]) -> Value {
@@ -290,7 +306,8 @@ pub fn spectra(records: &[IrRecord]) -> Value {
                 (peak > 0.0).then(|| 20.0 * peak.log10())
             })
             .collect();
-        actuators.push(json!({"actuator": record.meta.actuator, "db": db}));
+        let kind = record.meta.kind.map(|k| k.as_str());
+        actuators.push(json!({"actuator": record.meta.actuator, "kind": kind, "db": db}));
     }
     let centres: Vec<f64> = freq_hz.windows(2).map(|w| (w[0] * w[1]).sqrt()).collect();
     json!({"point": first.meta.point_index, "freq_hz": centres, "actuators": actuators})
