@@ -163,7 +163,7 @@ fn a_follower_sees_each_commit_with_its_time_and_reads_it_file_by_file_while_the
     let commit = &view.commits[0];
     assert_eq!((commit.seq, commit.batch.file.as_str()), (0, "batch-000000.parquet"));
     assert!(chrono::DateTime::parse_from_rfc3339(&commit.at).is_ok(), "{}", commit.at);
-    assert_eq!(view.live, [commit.batch.clone()]);
+    assert_eq!(view.live, std::slice::from_ref(&commit.batch));
     let read = Dataset::read_batch(dir.path(), &view.live[0], metaplate_store::ReadOptions::default()).unwrap();
     assert_eq!(read, first);
     // A file that no longer matches its entry is refused, not half read.
