@@ -13,7 +13,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use browser::{colours, headless, screenshot};
 use serde_json::Value;
+
+mod browser;
 
 /// The scan of `recipes.rs` (3 x 2 points of the metamaterial plate, the quick protocol, seed 5), so that the
 /// files share one Green's-function cache entry.
@@ -315,39 +318,6 @@ fn a_calibration_is_followed_actuator_by_actuator() {
     assert_eq!((last.id, last.data["actuator"].as_u64()), (7, Some(7)), "{}", last.data);
 }
 
-fn chromium() -> PathBuf {
-    let path = std::env::var_os("METAPLATE_CHROMIUM").map_or_else(|| PathBuf::from("chromium"), PathBuf::from);
-    let found = Command::new(&path).arg("--version").output().is_ok_and(|o| o.status.success());
-    assert!(
-        found,
-        "headless Chromium is needed to render the monitor: `bash scripts/install-deps.sh` installs Debian's \
-         chromium (or point METAPLATE_CHROMIUM at one)"
-    );
-    path
-}
-
-/// A screenshot of `url` in headless Chromium, `width` x `height` px, decoded as RGB(A) pixels.
-fn screenshot(url: &str, png: &Path, width: u32, height: u32) -> (png::OutputInfo, Vec<u8>) {
-    let profile = tempfile::tempdir().unwrap();
-    let out = Command::new(chromium())
-        // As root (CI) Chromium needs --no-sandbox; the rest keeps it off this machine's closed network.
-        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--hide-scrollbars"])
-        .args(["--disable-background-networking", "--disable-component-update", "--disable-sync"])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .arg(format!("--window-size={width},{height}"))
-        .arg(format!("--screenshot={}", png.display()))
-        .arg(url)
-        .output()
-        .unwrap();
-    assert!(out.status.success() && png.exists(), "chromium failed: {}", String::from_utf8_lossy(&out.stderr));
-    let decoder = png::Decoder::new(BufReader::new(std::fs::File::open(png).unwrap()));
-    let mut reader = decoder.read_info().unwrap();
-    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut pixels).unwrap();
-    pixels.truncate(info.buffer_size());
-    (info, pixels)
-}
-
 #[test]
 fn the_page_renders_the_grid_the_snr_map_and_the_spectra_in_chromium_while_a_scan_runs() {
     let tmp = tempfile::tempdir().unwrap();
@@ -359,8 +329,7 @@ fn the_page_renders_the_grid_the_snr_map_and_the_spectra_in_chromium_while_a_sca
     let png = tmp.path().join("monitor.png");
     let (info, pixels) = screenshot(&format!("http://localhost:{}/", monitor.port), &png, 1400, 1000);
     wait_ok(run);
-    let colours: HashSet<[u8; 3]> =
-        pixels.chunks_exact(info.color_type.samples()).map(|p| [p[0], p[1], p[2]]).collect();
+    let colours = colours(&info, &pixels);
     // The status map's measured green, the spectrum's first two actuators' colours, and SNR cells (viridis, not in
     // the colour bar's few steps alone: any of its yellows and greens) are drawn.
     for (what, rgb) in
@@ -370,12 +339,8 @@ fn the_page_renders_the_grid_the_snr_map_and_the_spectra_in_chromium_while_a_sca
     }
     // What the page shows as text, after its script ran: progress and a remaining time or the end.
     let profile = tempfile::tempdir().unwrap();
-    let dom = Command::new(chromium())
-        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .args(["--dump-dom", &format!("http://localhost:{}/", monitor.port)])
-        .output()
-        .unwrap();
+    let dom =
+        headless(profile.path()).args(["--dump-dom", &format!("http://localhost:{}/", monitor.port)]).output().unwrap();
     let dom = String::from_utf8_lossy(&dom.stdout);
     assert!(dom.contains("6 / 6 points"), "the page shows the progress: {dom}");
     assert!(dom.contains("<svg") && dom.contains("act 7"), "maps and spectra: {dom}");
