@@ -295,6 +295,22 @@ fn a_killed_scan_shows_where_it_stopped_and_its_resume_is_followed_to_the_end() 
 }
 
 #[test]
+fn a_run_deleted_and_started_again_in_its_directory_is_followed_from_its_first_commit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scan = tmp.path().join("scan");
+    wait_ok(start_scan(&scan, false, 0));
+    let monitor = Monitor::start(&scan);
+    let mut events = monitor.events(None);
+    std::fs::remove_dir_all(&scan).unwrap();
+    monitor.wait_state(|s| s["status"] == "waiting");
+    wait_ok(start_scan(&scan, false, 0));
+    let ids: Vec<u64> =
+        std::iter::from_fn(|| events.next_commit(Duration::from_secs(30)).map(|c| c.id)).take(6).collect();
+    assert_eq!(ids, [0, 1, 2, 3, 4, 5], "the new run's commits, from its first");
+    assert_eq!(monitor.wait_state(|s| s["status"] == "finished")["points_done"].as_u64(), Some(6));
+}
+
+#[test]
 fn a_calibration_is_followed_actuator_by_actuator() {
     let tmp = tempfile::tempdir().unwrap();
     let cal = tmp.path().join("cal");

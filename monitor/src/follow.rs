@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
 use metaplate_store::journal::{BatchEntry, JournalView};
-use metaplate_store::{Dataset, IrMeta, IrRecord, JOURNAL_FILE, Manifest, ReadOptions, StoreError};
+use metaplate_store::{Dataset, IrMeta, IrRecord, JOURNAL_FILE, MANIFEST_FILE, Manifest, ReadOptions, StoreError};
 
 /// What a run directory holds at one poll.
 #[derive(Debug, Clone, Default)]
@@ -37,15 +37,22 @@ impl RunFiles {
 #[derive(Debug)]
 pub struct Follower {
     dir: PathBuf,
+    /// Size and modification time of the manifest when last read.
+    manifest_stamp: Option<(u64, SystemTime)>,
     /// Size and modification time of the journal when last read completely.
     stamp: Option<(u64, SystemTime)>,
     files: RunFiles,
 }
 
+/// Size and modification time of `path`, or `None` if it is not there.
+fn stamp_of(path: &Path) -> Option<(u64, SystemTime)> {
+    fs::metadata(path).ok().and_then(|m| Some((m.len(), m.modified().ok()?)))
+}
+
 impl Follower {
     /// Follows `dir`, which need not exist yet.
     pub fn new(dir: impl Into<PathBuf>) -> Self {
-        Self { dir: dir.into(), stamp: None, files: RunFiles::default() }
+        Self { dir: dir.into(), manifest_stamp: None, stamp: None, files: RunFiles::default() }
     }
 
     /// The directory followed.
@@ -58,20 +65,36 @@ impl Follower {
         &self.files
     }
 
-    /// Looks at the directory again; returns whether anything the snapshot shows changed.
+    /// Looks at the directory again; returns whether anything the snapshot shows changed. A directory emptied, or
+    /// holding another dataset than before (deleted and started again), is followed from scratch.
     pub fn poll(&mut self) -> bool {
         let mut changed = false;
-        if self.files.manifest.is_none() {
+        let manifest_stamp = stamp_of(&self.dir.join(MANIFEST_FILE));
+        if manifest_stamp != self.manifest_stamp {
             match Manifest::read(&self.dir) {
                 Ok(manifest) => {
+                    let same = |old: &Manifest| {
+                        old.created_at == manifest.created_at && old.config_hash == manifest.config_hash
+                    };
+                    if !self.files.manifest.as_ref().is_none_or(same) {
+                        self.restart();
+                    }
                     self.files.manifest = Some(manifest);
+                    self.manifest_stamp = manifest_stamp;
                     changed = true;
                 }
-                // Not there yet (or being written): the run has not created its dataset.
-                Err(_) => return changed,
+                Err(_) if manifest_stamp.is_none() && self.files.manifest.is_some() => {
+                    self.restart();
+                    return true;
+                }
+                // Not there yet, or being replaced: looked at again at the next poll.
+                Err(_) => {}
             }
         }
-        let stamp = fs::metadata(self.dir.join(JOURNAL_FILE)).ok().and_then(|m| Some((m.len(), m.modified().ok()?)));
+        if self.files.manifest.is_none() {
+            return changed;
+        }
+        let stamp = stamp_of(&self.dir.join(JOURNAL_FILE));
         if stamp.is_none() || stamp == self.stamp {
             return changed;
         }
@@ -84,6 +107,11 @@ impl Follower {
             Err(e) => self.files.problem = Some(e.to_string()),
         }
         true
+    }
+
+    /// Forgets everything read.
+    fn restart(&mut self) {
+        (self.manifest_stamp, self.stamp, self.files) = (None, None, RunFiles::default());
     }
 
     /// Rereads the journal and reads the live files not read yet; forgets files no longer live.

@@ -1,5 +1,6 @@
 //! The HTTP side: routes, the Host and method guard, server-sent events.
 
+use std::collections::VecDeque;
 use std::convert::Infallible;
 use std::path::PathBuf;
 use std::sync::{Arc, PoisonError, RwLock};
@@ -198,6 +199,11 @@ async fn api_point(State(shared): State<Arc<Shared>>, UrlPath(n): UrlPath<String
     }
 }
 
+/// Which dataset `files` shows (its creation time), `None` before there is one.
+fn dataset_of(files: &RunFiles) -> Option<String> {
+    files.manifest.as_ref().map(|m| m.created_at.clone())
+}
+
 /// Server-sent events: one `commit` event per journal commit, its `id` the commit's sequence number. A client that
 /// reconnects with `Last-Event-ID: N` gets every commit after N first; a new client starts at the next commit.
 async fn events(
@@ -211,14 +217,21 @@ async fn events(
         None => shared.files().journal.commits.last().map(|c| c.seq),
     };
     let changes = shared.changes.subscribe();
+    // Sequence numbers count within one dataset: when another one replaces it in the directory, the stream starts
+    // again at its first commit.
+    let dataset = dataset_of(&shared.files());
     let stream = futures_util::stream::unfold(
-        (shared, changes, after, std::collections::VecDeque::<Event>::new()),
-        |(shared, mut changes, mut after, mut queue)| async move {
+        (shared, changes, after, dataset, VecDeque::<Event>::new()),
+        |(shared, mut changes, mut after, mut dataset, mut queue)| async move {
             loop {
                 if let Some(event) = queue.pop_front() {
-                    return Some((Ok(event), (shared, changes, after, queue)));
+                    return Some((Ok(event), (shared, changes, after, dataset, queue)));
                 }
                 let files = shared.files();
+                let current = dataset_of(&files);
+                if current != dataset {
+                    (dataset, after) = (current, None);
+                }
                 let since = after;
                 for commit in files.journal.commits.iter().filter(|c| since.is_none_or(|a| c.seq > a)) {
                     let data = state::commit_event(&files, commit).to_string();
