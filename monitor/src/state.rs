@@ -110,7 +110,7 @@ fn log_path(dir: &Path, recipe: &str) -> Option<std::path::PathBuf> {
     entries.filter_map(Result::ok).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "log"))
 }
 
-/// The last lines of the run's log (up to [`LOG_TAIL_BYTES`], whole lines), or empty.
+/// The last lines of the run's log (up to 6 KiB, whole lines), or empty.
 pub fn log_tail(dir: &Path, recipe: &str) -> String {
     let Some(path) = log_path(dir, recipe) else { return String::new() };
     let Ok(mut file) = File::open(path) else { return String::new() };
