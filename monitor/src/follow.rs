@@ -156,3 +156,71 @@ pub fn point_records(dir: &Path, journal: &JournalView, point: u32) -> Result<Op
     let records = read(dir, batch)?;
     Ok(Some(records.into_iter().filter(|r| r.meta.point_index == point).collect()))
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
+mod tests {
+    use metaplate_store::{BATCH_DIR, DatasetMeta, DatasetWriter, GridSpec, IfExists, SceneId};
+
+    use super::*;
+
+    fn point(grid: &GridSpec, index: u32) -> Vec<IrRecord> {
+        let (ix, iy) = (index % grid.nx as u32, index / grid.nx as u32);
+        (0..2)
+            .map(|a| IrRecord { meta: IrMeta::at_grid(grid, ix, iy, a, 24_000.0).unwrap(), ir: vec![0.5; 8] })
+            .collect()
+    }
+
+    #[test]
+    fn a_follower_reads_each_commit_once_waits_out_a_torn_line_and_a_missing_file_and_starts_over_on_a_new_run() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("run");
+        let mut follower = Follower::new(&dir);
+        assert!(!follower.poll() && follower.files().manifest.is_none(), "nothing there yet");
+
+        let grid = GridSpec::centred(3, 2, 0.005);
+        let config = serde_json::json!({"points": [0, 1, 2]}).as_object().cloned().unwrap();
+        let meta = DatasetMeta::new("scan", config, SceneId { name: "s".into(), hash: "h".into() }, "0", 1, grid);
+        let mut writer = DatasetWriter::create(&dir, meta.clone(), IfExists::Refuse).unwrap();
+        writer.commit_batch(&point(&grid, 0)).unwrap();
+        assert!(follower.poll());
+        assert_eq!((follower.files().rows.len(), follower.files().journal.commits.len()), (1, 1));
+        assert_eq!(follower.files().last_commit.as_ref().map(|(seq, rows)| (*seq, rows.len())), Some((0, 2)));
+        assert!(!follower.poll(), "nothing new: nothing read again");
+
+        // An append in progress: the line is left for later.
+        let journal = dir.join(JOURNAL_FILE);
+        let mut text = fs::read(&journal).unwrap();
+        let committed_len = text.len();
+        text.extend_from_slice(b"{\"seq\":1,\"at\":\"2026");
+        fs::write(&journal, &text).unwrap();
+        follower.poll();
+        assert_eq!(follower.files().journal.commits.len(), 1);
+        assert!(follower.files().journal.issues.iter().all(|i| i.torn_tail));
+        text.truncate(committed_len);
+        fs::write(&journal, &text).unwrap();
+
+        // A committed file gone from under it (a resume quarantining it): said, and tried again at the next poll.
+        writer.commit_batch(&point(&grid, 1)).unwrap();
+        let second = dir.join(BATCH_DIR).join("batch-000001.parquet");
+        let hidden = dir.join("hidden.parquet");
+        fs::rename(&second, &hidden).unwrap();
+        follower.poll();
+        assert!(follower.files().problem.is_some(), "the missing file is reported");
+        assert_eq!(follower.files().rows.len(), 1);
+        fs::rename(&hidden, &second).unwrap();
+        follower.poll();
+        assert_eq!((follower.files().rows.len(), follower.files().problem.as_deref()), (2, None));
+        assert_eq!(follower.files().last_commit.as_ref().map(|(seq, _)| *seq), Some(1));
+        drop(writer);
+
+        // The directory deleted and a new run started in it: followed from scratch.
+        fs::remove_dir_all(&dir).unwrap();
+        assert!(follower.poll() && follower.files().manifest.is_none() && follower.files().rows.is_empty());
+        let mut writer = DatasetWriter::create(&dir, meta, IfExists::Refuse).unwrap();
+        writer.commit_batch(&point(&grid, 2)).unwrap();
+        assert!(follower.poll());
+        let points: Vec<u32> = follower.files().all_rows().map(|m| m.point_index).collect();
+        assert_eq!(points, [2, 2]);
+    }
+}
