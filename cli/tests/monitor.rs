@@ -280,7 +280,7 @@ fn a_killed_scan_shows_where_it_stopped_and_its_resume_is_followed_to_the_end() 
     monitor.wait_state(|s| s["points_done"].as_u64().is_some_and(|n| n >= 2));
     run.kill().unwrap();
     run.wait().unwrap();
-    std::thread::sleep(2 * Duration::from_millis(250));
+    std::thread::sleep(5 * metaplate_monitor::POLL_INTERVAL);
     let killed = monitor.get_json("/api/state");
     let done = killed["points_done"].as_u64().unwrap();
     assert!((2..6).contains(&done), "{killed}");
