@@ -13,6 +13,7 @@ mod devices;
 mod export;
 mod focus;
 mod import;
+mod monitor;
 mod notify;
 mod paper_table;
 mod progress;
@@ -59,6 +60,9 @@ enum Command {
     Export(export::ExportArgs),
     /// Build a dataset from universal files (58/58b responses, 2411 nodes, 164 units) that analyze and focus read.
     Import(import::ImportArgs),
+    /// Watch a calibration or scan (running, finished or killed) in a browser: a read-only, loopback-only page
+    /// and API (`/api/state`, `/events`, `/api/point/N`) that follow its directory.
+    Monitor(monitor::MonitorArgs),
     /// One self-contained HTML report on scan datasets (one plate or the pair): the paper-against-suite table,
     /// the figures, each measurement's summary with status and SNR maps, its error against the simulated truth,
     /// and its provenance.
@@ -125,6 +129,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Replay(args) => replay::run(&args),
+        Command::Monitor(args) => monitor::run(&args),
         Command::Report(args) => report::run(&args),
         Command::Tradeoff(args) => tradeoff::run(&args),
         Command::Simulate { command } => simulate::run(&command),

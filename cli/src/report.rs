@@ -17,20 +17,16 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use base64::Engine as _;
 use clap::Args;
-use metaplate_core::grid::GridSpec;
 use metaplate_core::scene::Scene;
 use metaplate_dsp::stats::quantile;
-use metaplate_figures::{CellStatus, snr_map_svg, status_map_svg};
+use metaplate_figures::{snr_map_svg, status_map_svg};
+use metaplate_monitor::cells::{SNR_SCALE_DB, grid_cells, planned_points};
 use metaplate_recipes::Calibration;
-use metaplate_store::{Dataset, Status};
+use metaplate_store::Dataset;
 use serde_json::{Value, json};
 
 use crate::cache::CacheArgs;
 use crate::{analyze, paper_table, progress, truth};
-
-/// Fixed SNR colour scale of the maps, dB: 0 is no signal; the scan's default gate (20 dB) sits a fifth of the way
-/// up, and the mock lab's taped plates (60 to 80 dB) stay below the top.
-const SNR_SCALE_DB: (f64, f64) = (0.0, 100.0);
 
 /// Width of each grid map on the page, px.
 const MAP_WIDTH_PX: usize = 480;
@@ -277,8 +273,8 @@ fn plate_section(page: &mut String, name: &str, plate: &Value) -> anyhow::Result
     kv(page, "Green's functions against the truth", &truth_text);
     page.push_str("</table>");
     if let Some(d) = &dataset {
-        let (states, snr) = grid_cells(d);
         let grid = d.manifest().meta.grid;
+        let (states, snr) = grid_cells(&grid, &planned_points(&d.manifest().meta.config), d.rows());
         let _ = write!(
             page,
             "<div class=\"maps\"><figure>{}<figcaption>Grid points by status (worst over the actuators).</figcaption>\
@@ -316,45 +312,6 @@ fn provenance(page: &mut String, dataset: &Dataset, plate: &Value) {
     kv(page, "created", &manifest.created_at);
     kv(page, "measured with", &format!("metaplate {}", meta.software_version));
     page.push_str("</table>");
-}
-
-/// Per grid point: the worst status over its actuators (not planned when the plan does not hold it, pending when
-/// planned and not committed), and its lowest SNR.
-fn grid_cells(dataset: &Dataset) -> (Vec<CellStatus>, Vec<Option<f64>>) {
-    let grid: GridSpec = dataset.manifest().meta.grid;
-    let mut states = vec![CellStatus::NotPlanned; grid.len()];
-    if let Some(points) = dataset.manifest().meta.config.get("points").and_then(Value::as_array) {
-        for p in points.iter().filter_map(Value::as_u64) {
-            if let Some(s) = states.get_mut(p as usize) {
-                *s = CellStatus::Pending;
-            }
-        }
-    }
-    let mut snr: Vec<Option<f64>> = vec![None; grid.len()];
-    let rank = |s: CellStatus| CellStatus::ALL.iter().position(|x| *x == s).unwrap_or(0);
-    let mut seen = vec![false; grid.len()];
-    for meta in dataset.rows() {
-        let i = meta.point_index as usize;
-        let (Some(state), Some(cell_snr), Some(seen)) = (states.get_mut(i), snr.get_mut(i), seen.get_mut(i)) else {
-            continue;
-        };
-        let row_state = match meta.status {
-            Some(Status::ReMeasured) => CellStatus::ReMeasured,
-            Some(Status::Overrange) => CellStatus::Overrange,
-            Some(Status::Dropout) => CellStatus::Dropout,
-            Some(Status::Failed) => CellStatus::Failed,
-            Some(Status::Valid | Status::GroundTruth) | None => CellStatus::Measured,
-        };
-        // Worst over the actuators: later in the legend's order is worse, up to failed.
-        if !*seen || rank(row_state) > rank(*state) {
-            *state = row_state;
-        }
-        *seen = true;
-        if let Some(v) = meta.snr_db.filter(|v| v.is_finite()) {
-            *cell_snr = Some(cell_snr.map_or(v, |c: f64| c.min(v)));
-        }
-    }
-    (states, snr)
 }
 
 /// One PNG figure embedded as a data URI, with its caption; other files (the SVG twins) are skipped.

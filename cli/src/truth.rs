@@ -67,10 +67,9 @@ pub fn dataset_errors(
 
 /// The scan's planned points in its order (the configuration's `points`), else the dataset's measured points.
 fn planned_points(dataset: &Dataset) -> Vec<usize> {
-    let planned = dataset.manifest().meta.config.get("points").and_then(Value::as_array).and_then(|points| {
-        points.iter().map(|p| p.as_u64().and_then(|p| usize::try_from(p).ok())).collect::<Option<Vec<_>>>()
-    });
-    planned.unwrap_or_else(|| dataset.points().iter().map(|&p| p as usize).collect())
+    let planned = metaplate_monitor::cells::planned_points(&dataset.manifest().meta.config);
+    let points = if planned.is_empty() { dataset.points() } else { planned.as_slice() };
+    points.iter().map(|&p| p as usize).collect()
 }
 
 /// Sorted errors as the JSON the demo's summary and the report hold: band, row count, median, p95 and worst.

@@ -2,15 +2,18 @@
 //! measurement's summary, provenance and the error against the truth, and renders in headless Chromium with its
 //! figures and maps visible.
 //!
-//! Needs Debian's `chromium` (installed by `scripts/install-deps.sh`; another binary through
-//! `METAPLATE_CHROMIUM`). Without it the test fails, saying so: a report nobody rendered is not tested.
+//! Needs headless Chromium (`browser/mod.rs`: Debian's `chromium`, installed by `scripts/install-deps.sh`, or another
+//! binary through `METAPLATE_CHROMIUM`). Without it the test fails, saying so: a report nobody rendered is not tested.
 
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
 
-use std::collections::HashSet;
+mod browser;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+use browser::{colours, screenshot};
 
 /// The scan of `recipes.rs` (3 x 2 points of the metamaterial plate, the quick protocol, seed 5), so that both
 /// files share one Green's-function cache entry.
@@ -26,44 +29,6 @@ fn metaplate(args: &[&str]) -> Output {
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn chromium() -> PathBuf {
-    let path = std::env::var_os("METAPLATE_CHROMIUM").map_or_else(|| PathBuf::from("chromium"), PathBuf::from);
-    let found = Command::new(&path).arg("--version").output().is_ok_and(|o| o.status.success());
-    assert!(
-        found,
-        "headless Chromium is needed to render the report: `bash scripts/install-deps.sh` installs Debian's \
-         chromium (or point METAPLATE_CHROMIUM at one)"
-    );
-    path
-}
-
-/// A full-page screenshot of `html` in headless Chromium, `width` x `height` px, decoded as RGB(A) pixels.
-fn screenshot(html: &Path, png: &Path, width: u32, height: u32) -> (png::OutputInfo, Vec<u8>) {
-    let profile = tempfile::tempdir().unwrap();
-    let out = Command::new(chromium())
-        // As root (CI) Chromium needs --no-sandbox; the rest keeps it off this machine's closed network.
-        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--hide-scrollbars"])
-        .args(["--disable-background-networking", "--disable-component-update", "--disable-sync"])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .arg(format!("--window-size={width},{height}"))
-        .arg(format!("--screenshot={}", png.display()))
-        .arg(format!("file://{}", html.display()))
-        .output()
-        .unwrap();
-    assert!(out.status.success() && png.exists(), "chromium failed: {}", text(&out.stderr));
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png).unwrap()));
-    let mut reader = decoder.read_info().unwrap();
-    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut pixels).unwrap();
-    pixels.truncate(info.buffer_size());
-    (info, pixels)
-}
-
-fn colours(info: &png::OutputInfo, pixels: &[u8]) -> HashSet<[u8; 3]> {
-    let step = info.color_type.samples();
-    pixels.chunks_exact(step).map(|p| [p[0], p[1], p[2]]).collect()
 }
 
 #[test]
@@ -120,9 +85,11 @@ fn a_scan_report_is_self_contained_and_renders_with_its_figures() {
     }
     std::fs::write(&broken, control).unwrap();
     let (width, height) = (1200, 6000);
-    let (info, pixels) = screenshot(&html, &tmp.path().join("report.png"), width, height);
+    let (info, pixels) =
+        screenshot(&format!("file://{}", html.display()), &tmp.path().join("report.png"), width, height);
     assert_eq!((info.width, info.height), (width, height));
-    let (info_c, pixels_c) = screenshot(&broken, &tmp.path().join("broken.png"), width, height);
+    let (info_c, pixels_c) =
+        screenshot(&format!("file://{}", broken.display()), &tmp.path().join("broken.png"), width, height);
     let (seen, seen_control) = (colours(&info, &pixels), colours(&info_c, &pixels_c));
     assert!(
         seen.len() > 3 * seen_control.len() && seen.len() > 1000,

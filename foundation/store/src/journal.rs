@@ -136,6 +136,8 @@ fn decode_line(text: &str) -> Result<Line, String> {
 pub(crate) struct JournalRead {
     /// Good entries with their sequence numbers, in order.
     pub entries: Vec<(u64, JournalEntry)>,
+    /// When each of `entries` was journaled (its `at`), in the same order.
+    pub at: Vec<String>,
     /// Lines ignored.
     pub issues: Vec<JournalIssue>,
     /// The good lines, newlines included: the journal as it should be.
@@ -176,6 +178,7 @@ pub(crate) fn read(dir: &Path) -> Result<Option<JournalRead>, StoreError> {
                 read.good_text.push_str(std::str::from_utf8(chunk).unwrap_or_default());
                 read.good_text.push('\n');
                 read.entries.push((line.seq, line.entry));
+                read.at.push(line.at);
             }
             Err(reason) => read.issues.push(issue(reason)),
         }
@@ -188,6 +191,51 @@ pub(crate) fn read(dir: &Path) -> Result<Option<JournalRead>, StoreError> {
         });
     }
     Ok(Some(read))
+}
+
+/// One batch commit as the journal records it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JournalCommit {
+    /// Sequence number of its journal line.
+    pub seq: u64,
+    /// When it was journaled: RFC 3339, UTC, milliseconds (`2026-01-31T23:59:59.999Z`).
+    pub at: String,
+    /// The committed file.
+    pub batch: BatchEntry,
+}
+
+/// What a dataset's journal says, for a reader that follows a dataset while it is written (see [`view`]).
+#[derive(Debug, Clone, Default)]
+pub struct JournalView {
+    /// Every batch line, in journal order, whether or not its file still holds the dataset (compactions are not
+    /// commits: they add no rows).
+    pub commits: Vec<JournalCommit>,
+    /// The files that hold the dataset now (after compactions and quarantines), in commit order.
+    pub live: Vec<BatchEntry>,
+    /// Lines ignored: a torn last line (an append in progress, or a crash) or damage.
+    pub issues: Vec<JournalIssue>,
+}
+
+/// Reads the journal of the dataset in `dir` without taking the writer's lock or changing anything, so that it is
+/// safe beside a running writer: a line being appended is reported as a torn tail and left for the next read.
+/// `None` if the dataset has no journal (yet, or written before the journal existed).
+///
+/// # Errors
+/// [`StoreError::Io`] if the file exists but cannot be read.
+pub fn view(dir: &Path) -> Result<Option<JournalView>, StoreError> {
+    let Some(read) = read(dir)? else { return Ok(None) };
+    let live = Live::replay(&read.entries);
+    let commits = read
+        .entries
+        .iter()
+        .zip(&read.at)
+        .filter_map(|((seq, entry), at)| match entry {
+            JournalEntry::Batch(batch) => Some(JournalCommit { seq: *seq, at: at.clone(), batch: batch.clone() }),
+            _ => None,
+        })
+        .collect();
+    let issues = read.issues.into_iter().chain(live.issues).collect();
+    Ok(Some(JournalView { commits, live: live.batches, issues }))
 }
 
 /// The dataset a journal describes: the batch files that hold it, in journal order.

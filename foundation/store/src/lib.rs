@@ -38,7 +38,7 @@ mod writer;
 pub use checksum::sha256;
 pub use compact::{CompactReport, compact};
 pub use error::StoreError;
-pub use journal::{JOURNAL_FILE, JournalIssue};
+pub use journal::{JOURNAL_FILE, JournalCommit, JournalIssue, JournalView};
 pub use manifest::{
     BATCH_DIR, BatchInfo, DatasetDescription, DatasetMeta, GridSpec, IR_UNIT_M_S_PER_N, MANIFEST_FILE, Manifest,
     SCHEMA_VERSION, SceneId,

@@ -17,7 +17,7 @@ use crate::error::StoreError;
 use crate::index::RowIndex;
 use crate::journal::{self, BatchEntry, JOURNAL_FILE, Live};
 use crate::manifest::{BATCH_DIR, BatchInfo, Manifest};
-use crate::record::IrMeta;
+use crate::record::{IrMeta, IrRecord};
 
 /// A dataset in memory, in columnar form: per-row metadata, and all impulse responses back to back in one `Vec<f32>`
 /// (row `r` at `r * ir_len()..(r + 1) * ir_len()`), with a (point, actuator) lookup.
@@ -161,6 +161,25 @@ impl Dataset {
             .map(|read| Live::replay(&read.entries).batches.iter().flat_map(|b| b.keys.iter().copied()).collect()))
     }
 
+    /// Reads one committed file of the dataset in `dir`, as its journal entry `batch` describes it (from
+    /// [`crate::journal::view`]): its size and (unless `options` says otherwise) SHA-256 verified, its row count and
+    /// keys checked against the entry. For a reader that follows a dataset file by file as it grows.
+    ///
+    /// # Errors
+    /// [`StoreError::BatchMissing`] (also when a resume has just quarantined it), [`StoreError::SizeMismatch`],
+    /// [`StoreError::ChecksumMismatch`], [`StoreError::Parquet`] / [`StoreError::Arrow`],
+    /// [`StoreError::RowCountMismatch`], [`StoreError::KeysMismatch`], [`StoreError::Io`].
+    pub fn read_batch(
+        dir: impl AsRef<Path>,
+        batch: &BatchEntry,
+        options: ReadOptions,
+    ) -> Result<Vec<IrRecord>, StoreError> {
+        let mut decoded = Decoded::default();
+        load(dir.as_ref(), &batch.info(), options.verify_checksums, &mut Vec::new(), &mut decoded)?;
+        check_rows(&batch.file, batch.rows, Some(&batch.keys), &decoded)?;
+        Ok(decoded.rows().map(|(meta, ir)| IrRecord { meta: *meta, ir: ir.to_vec() }).collect())
+    }
+
     /// What the reader skipped and why (journal lines torn by a crash or damaged); empty for a clean dataset.
     pub fn notes(&self) -> &[String] {
         &self.notes
@@ -302,25 +321,35 @@ fn read_committed(
     let mut index = RowIndex::default();
     for_each_file(dir, &files, options.verify_checksums, threads, |i, decoded| {
         let Some((batch, keys)) = batches.get(i) else { return Ok(()) };
-        if decoded.metas.len() as u64 != batch.rows {
-            return Err(StoreError::RowCountMismatch {
-                file: batch.file.clone(),
-                expected: batch.rows,
-                actual: decoded.metas.len() as u64,
-            });
-        }
-        if let Some(keys) = keys
-            && let Some(row) = decoded.metas.iter().zip(keys).position(|(m, k)| m.key() != *k)
-        {
-            let reason = format!("row {row} is {:?}, the journal says {:?}", decoded.metas[row].key(), keys[row]);
-            return Err(StoreError::KeysMismatch { file: batch.file.clone(), reason });
-        }
+        check_rows(&batch.file, batch.rows, keys.as_deref(), decoded)?;
         let checked = index.check(&batch.file, &manifest.meta.grid, decoded.rows())?;
         let ir_len = checked.ir_len();
         index.accept(checked);
         consume(total_rows, ir_len, decoded)
     })?;
     Ok(Committed { manifest, index, notes })
+}
+
+/// Checks a decoded file against what its journal entry (or manifest line) says: `rows` rows, and, when the journal
+/// lists them, these keys in this order.
+///
+/// # Errors
+/// [`StoreError::RowCountMismatch`], [`StoreError::KeysMismatch`].
+fn check_rows(file: &str, rows: u64, keys: Option<&[(u32, u16)]>, decoded: &Decoded) -> Result<(), StoreError> {
+    if decoded.metas.len() as u64 != rows {
+        return Err(StoreError::RowCountMismatch {
+            file: file.to_owned(),
+            expected: rows,
+            actual: decoded.metas.len() as u64,
+        });
+    }
+    if let Some(keys) = keys
+        && let Some(row) = decoded.metas.iter().zip(keys).position(|(m, k)| m.key() != *k)
+    {
+        let reason = format!("row {row} is {:?}, the journal says {:?}", decoded.metas[row].key(), keys[row]);
+        return Err(StoreError::KeysMismatch { file: file.to_owned(), reason });
+    }
+    Ok(())
 }
 
 /// Most threads [`Dataset::open_with`] reads and decodes files on: past a few, the disk is the limit.

@@ -144,3 +144,31 @@ fn extreme_f32_values_round_trip() {
     writer.finish().unwrap();
     assert_eq!(bits(Dataset::open(dir.path()).unwrap().ir(0, 0).unwrap()), bits(&written[0].ir));
 }
+
+#[test]
+fn a_follower_sees_each_commit_with_its_time_and_reads_it_file_by_file_while_the_writer_is_open() {
+    let dir = tempfile::tempdir().unwrap();
+    assert!(metaplate_store::journal::view(dir.path()).unwrap().is_none(), "no journal yet");
+    let first = records(&[(0, 0), (1, 0)], &[0, 1], 16);
+    let mut writer = DatasetWriter::create(dir.path(), meta(), IfExists::Refuse).unwrap();
+    writer.commit_batch(&first).unwrap();
+    // A line being appended: the follower reports it as a torn tail and reads the rest.
+    let journal = dir.path().join(JOURNAL_FILE);
+    let mut text = std::fs::read(&journal).unwrap();
+    text.extend_from_slice(b"{\"seq\":1,\"at\":");
+    std::fs::write(&journal, &text).unwrap();
+    let view = metaplate_store::journal::view(dir.path()).unwrap().unwrap();
+    assert_eq!(view.commits.len(), 1);
+    assert!(view.issues.len() == 1 && view.issues[0].torn_tail, "{:?}", view.issues);
+    let commit = &view.commits[0];
+    assert_eq!((commit.seq, commit.batch.file.as_str()), (0, "batch-000000.parquet"));
+    assert!(chrono::DateTime::parse_from_rfc3339(&commit.at).is_ok(), "{}", commit.at);
+    assert_eq!(view.live, std::slice::from_ref(&commit.batch));
+    let read = Dataset::read_batch(dir.path(), &view.live[0], metaplate_store::ReadOptions::default()).unwrap();
+    assert_eq!(read, first);
+    // A file that no longer matches its entry is refused, not half read.
+    let mut wrong = view.live[0].clone();
+    wrong.keys.swap(0, 1);
+    let err = Dataset::read_batch(dir.path(), &wrong, metaplate_store::ReadOptions::default()).unwrap_err();
+    assert!(matches!(err, StoreError::KeysMismatch { .. }), "{err}");
+}

@@ -1,0 +1,105 @@
+//! `metaplate monitor`: a read-only web page and API that follow a calibration or scan directory while it runs, after
+//! it finished, or after it was killed.
+//!
+//! The monitor reads what resume reads (`manifest.json`, `journal.jsonl`, the committed Parquet files, the run's
+//! log) and nothing else; it opens every file read-only, takes no lock, and tolerates a torn last journal line and
+//! files appearing (or being quarantined) under it, so it can never harm the run. It is a separate process: the
+//! recipes, drivers and mocks know nothing of it, and its async runtime (tokio) stays out of the measurement path.
+//!
+//! It binds a loopback address only ([`serve`] refuses any other), refuses a request whose `Host` header is not a
+//! loopback name with 403 (DNS rebinding), and answers only GET and HEAD (405 otherwise). To watch from another
+//! machine, tunnel: `ssh -L 8765:127.0.0.1:8765 lab-pc`, then open `http://localhost:8765/`.
+//!
+//! Endpoints:
+//! - `/`: one self-contained page (inline script and style; it fetches only this API) with the grid by status, the
+//!   SNR map on a fixed scale, the last committed point's spectra, progress, the remaining time, retries, free disk,
+//!   the time since the last commit with a stall warning, and the log's tail; it updates on each `commit` event.
+//! - `/api/state`: a JSON snapshot: `status` (`waiting` for the dataset, `running`, `stalled`, `stopped`,
+//!   `finished`), `recipe`, `unit` (`point` or `actuator`), `points_total`, `points_done` (units), `status_counts`
+//!   (units by worst status: `measured`, `re-measured`, `overrange`, `dropout`, `failed`, `pending`), `started_at`,
+//!   `elapsed_s` (wall clock since the dataset was created, to the last commit once finished), `median_point_s`,
+//!   `remaining_s: {median, p90}` (from the journal's commit times, by `metaplate_recipes::RemainingTime`),
+//!   `finish_at: {median, p90}` (clock times, RFC 3339 UTC), `last_commit_age_s`, `stall_after_s`, `stalled`,
+//!   `retries` (the committed rows' retries), `re_measured` (rows), `disk: {free_bytes, need_bytes}` (free space of
+//!   the run's file system, and the mean committed file size times the units left), `last_seq`, `journal_issues`,
+//!   `problem` (a read that failed and will be retried).
+//! - `/api/view`: what the page draws: `state`, `status_svg`, `snr_svg`, `snr_scale_db`, `spectrum` (the last
+//!   committed point's magnitude per actuator, dB on log-spaced frequencies), `log_tail`.
+//! - `/api/point/N`: grid point N's committed rows (actuator, status, SNR, retries, time, impulse response) and its
+//!   worst status; 404 while it is not committed.
+//! - `/events`: server-sent events, one `commit` per journal commit with `id` its sequence number and data
+//!   `{seq, at, file, point (a calibration: actuator), rows, status, snr_db}`; `Last-Event-ID: N` replays the commits after N; a comment
+//!   every [`server::KEEP_ALIVE`] keeps an idle stream open.
+
+pub mod cells;
+pub mod follow;
+mod server;
+pub mod state;
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::{Arc, RwLock};
+
+pub use server::{KEEP_ALIVE, POLL_INTERVAL, is_loopback_host};
+
+/// Why the monitor could not serve.
+#[derive(Debug, thiserror::Error)]
+pub enum MonitorError {
+    /// The address to bind is not a loopback address.
+    #[error(
+        "{addr} is not a loopback address: the monitor serves this machine only (bind 127.0.0.1 or [::1], and use \
+         `ssh -L PORT:127.0.0.1:PORT HOST` to watch from elsewhere)"
+    )]
+    NotLoopback {
+        /// The address asked for.
+        addr: SocketAddr,
+    },
+    /// Starting the runtime, binding or serving failed.
+    #[error("{op}: {source}")]
+    Io {
+        /// What was being done.
+        op: &'static str,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+}
+
+/// Serves the monitor of the run directory `run_dir` (which need not exist yet) on `bind`, a loopback address (port
+/// 0: any free port), until the process ends. `on_ready` is called once with the address bound, before the first
+/// request is served.
+///
+/// # Errors
+/// [`MonitorError::NotLoopback`] for another address; [`MonitorError::Io`] if the address cannot be bound or the
+/// runtime cannot start.
+pub fn serve(
+    run_dir: impl Into<PathBuf>,
+    bind: SocketAddr,
+    on_ready: impl FnOnce(SocketAddr),
+) -> Result<(), MonitorError> {
+    if !bind.ip().is_loopback() {
+        return Err(MonitorError::NotLoopback { addr: bind });
+    }
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_io()
+        .enable_time()
+        .build()
+        .map_err(|source| MonitorError::Io { op: "starting the runtime", source })?;
+    let mut follower = follow::Follower::new(run_dir);
+    follower.poll();
+    let (changes, _) = tokio::sync::watch::channel(0);
+    let files = RwLock::new(Arc::new(follower.files().clone()));
+    let shared = Arc::new(server::Shared { dir: follower.dir().to_path_buf(), files, changes });
+    let follower_share = Arc::clone(&shared);
+    std::thread::Builder::new()
+        .name("monitor-follow".into())
+        .spawn(move || server::follow(follower, &follower_share))
+        .map_err(|source| MonitorError::Io { op: "starting the follower thread", source })?;
+    runtime.block_on(async move {
+        let listener = tokio::net::TcpListener::bind(bind)
+            .await
+            .map_err(|source| MonitorError::Io { op: "binding the address", source })?;
+        let addr = listener.local_addr().map_err(|source| MonitorError::Io { op: "binding the address", source })?;
+        on_ready(addr);
+        axum::serve(listener, server::router(shared)).await.map_err(|source| MonitorError::Io { op: "serving", source })
+    })
+}
