@@ -104,6 +104,7 @@ fn main() -> std::process::ExitCode {
     let Err(error) = dispatch(cli.command) else { return std::process::ExitCode::SUCCESS };
     let message = format!("{error:#}");
     if let Some((recipe, args)) = run {
+        run::log_failure(&message);
         let failed = serde_json::json!({"event": "failed", "recipe": recipe, "error": message,
             "dataset": args.out.display().to_string()});
         if args.json {

@@ -22,8 +22,8 @@ pub struct MonitorArgs {
     /// refused: use `ssh -L` to watch from elsewhere.
     #[arg(long, default_value = "127.0.0.1:8765")]
     pub bind: SocketAddr,
-    /// Run this shell command (`sh -c CMD`) with a JSON summary on its standard input when the run finishes, stops
-    /// or stalls while the monitor watches, once per event (as `scan --notify-command`; the README has examples).
+    /// Run this shell command (`sh -c CMD`) with a JSON summary on its standard input when the run finishes, stops,
+    /// fails or stalls while the monitor watches, once per event (as `scan --notify-command`; the README has examples).
     #[arg(long, value_name = "CMD")]
     pub notify_command: Option<String>,
 }
@@ -44,7 +44,7 @@ pub fn run(args: &MonitorArgs) -> anyhow::Result<()> {
 }
 
 /// Watches the run for `--notify-command`: a follower of its own (read-only, as the page's) polled every second;
-/// the command runs when the run's status changes to finished, stopped or stalled while the monitor watches (a run
+/// the command runs when the run's status changes to finished, stopped, failed or stalled while the monitor watches (a run
 /// that had already ended when the monitor started is not news), once per event (a new stall after progress is a
 /// new event).
 fn notify_on_changes(dir: PathBuf, notifier: std::sync::Arc<Notifier>) {
@@ -55,7 +55,7 @@ fn notify_on_changes(dir: PathBuf, notifier: std::sync::Arc<Notifier>) {
         let state = snapshot(follower.files(), &dir, chrono::Utc::now());
         let status = state["status"].as_str().unwrap_or("waiting").to_owned();
         if previous.as_deref().is_some_and(|p| p != status)
-            && ["finished", "stopped", "stalled"].contains(&status.as_str())
+            && ["finished", "stopped", "failed", "stalled"].contains(&status.as_str())
         {
             let key = format!("{status} at {}", state["points_done"]);
             let summary = json!({

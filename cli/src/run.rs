@@ -468,6 +468,12 @@ impl Observer for Reporter {
     }
 }
 
+/// Writes a run's failure into its log (`DIR/<recipe>.log`, once the dataset exists), where the monitor reads how a
+/// run ended.
+pub fn log_failure(message: &str) {
+    tracing::error!(error = %message, "run failed");
+}
+
 /// The command line that continues this run: the original arguments with `--resume` added (once).
 pub fn resume_command() -> String {
     let mut args: Vec<String> = std::env::args().collect();

@@ -59,9 +59,14 @@ impl Monitor {
     }
 
     fn start_with(dir: &Path, extra: &[&str]) -> Self {
+        Self::start_env(dir, extra, &[])
+    }
+
+    fn start_env(dir: &Path, extra: &[&str], env: &[(&str, &str)]) -> Self {
         let mut child = Command::new(env!("CARGO_BIN_EXE_metaplate"))
             .args(["monitor", dir.to_str().unwrap(), "--bind", "127.0.0.1:0"])
             .args(extra)
+            .envs(env.iter().copied())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
             .spawn()
@@ -386,4 +391,23 @@ fn the_monitor_notifies_the_end_of_a_run_it_watched_once() {
     assert_eq!(finished.len(), 1, "{got:?}");
     assert_eq!((finished[0]["done"].as_u64(), finished[0]["total"].as_u64()), (Some(6), Some(6)), "{got:?}");
     assert_eq!(finished[0]["source"], "monitor");
+}
+
+#[test]
+fn a_slow_disk_delays_the_news_not_the_answers() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("scan");
+    wait_ok(start_scan(&dir, false, 0));
+    // Every poll of the run's files takes 2 s, as on a slow network disk; requests must not wait for one.
+    let monitor = Monitor::start_env(&dir, &[], &[("METAPLATE_TEST_POLL_PAUSE_MS", "2000")]);
+    let started = Instant::now();
+    for path in ["/api/state", "/api/view", "/", "/api/state", "/api/view"] {
+        let (status, body) = monitor.request("GET", path, None);
+        assert_eq!(status, 200, "{path}: {body}");
+    }
+    // Five answers in less time than one poll: none of them waited for the disk.
+    assert!(started.elapsed() < Duration::from_millis(2000), "{:?}", started.elapsed());
+    let (_, body) = monitor.request("GET", "/api/state", None);
+    let state: Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["points_done"], 6, "{state}");
 }

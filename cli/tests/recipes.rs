@@ -177,6 +177,10 @@ fn ctrl_c_stops_cleanly_and_resume_completes_refusing_a_changed_configuration() 
     assert!(!out.status.success(), "{stderr}");
     assert!(stderr.contains("protocol") && stderr.contains("--force"), "{stderr}");
     assert_eq!(Dataset::open(&dir).unwrap().len(), committed * ACTUATORS, "a refused resume changes nothing");
+    // The run's log says it failed, and why (the monitor reads how a run ended there).
+    let log = std::fs::read_to_string(dir.join("scan.log")).unwrap();
+    let last = log.lines().last().unwrap();
+    assert!(last.contains("metaplate::run: run failed") && last.contains("--force"), "{last}");
 
     let mut forced = changed.clone();
     forced.push("--force".into());

@@ -4,6 +4,7 @@
 
 use std::collections::{HashMap, HashSet};
 use std::fs;
+use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
@@ -24,6 +25,10 @@ pub struct RunFiles {
     /// Why the last poll could not read something (a file quarantined under it, a manifest being written); retried
     /// at the next poll.
     pub problem: Option<String>,
+    /// The last lines of the run's log (up to 6 KiB, whole lines), as last read; empty without a log.
+    pub log_tail: String,
+    /// Free bytes for an unprivileged writer on the run's file system, as last asked (at a commit or a log line).
+    pub free_bytes: Option<u64>,
 }
 
 impl RunFiles {
@@ -41,6 +46,8 @@ pub struct Follower {
     manifest_stamp: Option<(u64, SystemTime)>,
     /// Size and modification time of the journal when last read completely.
     stamp: Option<(u64, SystemTime)>,
+    /// Size and modification time of the log when its tail was last read.
+    log_stamp: Option<(u64, SystemTime)>,
     files: RunFiles,
 }
 
@@ -52,7 +59,7 @@ fn stamp_of(path: &Path) -> Option<(u64, SystemTime)> {
 impl Follower {
     /// Follows `dir`, which need not exist yet.
     pub fn new(dir: impl Into<PathBuf>) -> Self {
-        Self { dir: dir.into(), manifest_stamp: None, stamp: None, files: RunFiles::default() }
+        Self { dir: dir.into(), manifest_stamp: None, stamp: None, log_stamp: None, files: RunFiles::default() }
     }
 
     /// The directory followed.
@@ -68,6 +75,7 @@ impl Follower {
     /// Looks at the directory again; returns whether anything the snapshot shows changed. A directory emptied, or
     /// holding another dataset than before (deleted and started again), is followed from scratch.
     pub fn poll(&mut self) -> bool {
+        test_poll_pause();
         let mut changed = false;
         let manifest_stamp = stamp_of(&self.dir.join(MANIFEST_FILE));
         if manifest_stamp != self.manifest_stamp {
@@ -91,8 +99,16 @@ impl Follower {
                 Err(_) => {}
             }
         }
-        if self.files.manifest.is_none() {
-            return changed;
+        let Some(recipe) = self.files.manifest.as_ref().map(|m| m.meta.recipe.clone()) else { return changed };
+        // Every file is read here, on the follower's thread: requests only read what this published, so a slow
+        // disk delays the page's news, never its answers.
+        let log = log_path(&self.dir, &recipe);
+        let log_stamp = log.as_deref().and_then(stamp_of);
+        if log_stamp != self.log_stamp {
+            self.files.log_tail = log.as_deref().map(log_tail).unwrap_or_default();
+            self.files.free_bytes = free_bytes(&self.dir);
+            self.log_stamp = log_stamp;
+            changed = true;
         }
         let stamp = stamp_of(&self.dir.join(JOURNAL_FILE));
         if stamp.is_none() || stamp == self.stamp {
@@ -102,6 +118,7 @@ impl Follower {
             Ok(()) => {
                 self.stamp = stamp;
                 self.files.problem = None;
+                self.files.free_bytes = free_bytes(&self.dir);
             }
             // Left unstamped, so that the next poll tries again.
             Err(e) => self.files.problem = Some(e.to_string()),
@@ -111,7 +128,7 @@ impl Follower {
 
     /// Forgets everything read.
     fn restart(&mut self) {
-        (self.manifest_stamp, self.stamp, self.files) = (None, None, RunFiles::default());
+        (self.manifest_stamp, self.stamp, self.log_stamp, self.files) = (None, None, None, RunFiles::default());
     }
 
     /// Rereads the journal and reads the live files not read yet; forgets files no longer live.
@@ -140,6 +157,63 @@ impl Follower {
         self.files.journal = view;
         result
     }
+}
+
+/// Bytes of the log's tail shown.
+const LOG_TAIL_BYTES: u64 = 6 * 1024;
+
+/// Test hook, not an API: the environment variable a test sets to a number of milliseconds every poll then takes
+/// before it reads anything, as on a slow disk. Read once per process; unset (or not a number) means no pause.
+#[doc(hidden)]
+pub const TEST_POLL_PAUSE_ENV: &str = "METAPLATE_TEST_POLL_PAUSE_MS";
+
+/// Sleeps as [`TEST_POLL_PAUSE_ENV`] says (nothing when it is unset).
+fn test_poll_pause() {
+    static PAUSE_MS: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    let ms =
+        *PAUSE_MS.get_or_init(|| std::env::var(TEST_POLL_PAUSE_ENV).ok().and_then(|v| v.parse().ok()).unwrap_or(0));
+    if ms > 0 {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
+}
+
+/// The run's log (`scan.log`, `calibrate.log`, or any `*.log`) in `dir`.
+fn log_path(dir: &Path, recipe: &str) -> Option<PathBuf> {
+    let named = dir.join(format!("{recipe}.log"));
+    if named.is_file() {
+        return Some(named);
+    }
+    let entries = fs::read_dir(dir).ok()?;
+    entries.filter_map(Result::ok).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "log"))
+}
+
+/// The last lines of the log at `path` (up to [`LOG_TAIL_BYTES`], whole lines), or empty.
+fn log_tail(path: &Path) -> String {
+    let Ok(mut file) = fs::File::open(path) else { return String::new() };
+    let len = file.metadata().map_or(0, |m| m.len());
+    let start = len.saturating_sub(LOG_TAIL_BYTES);
+    let mut bytes = Vec::new();
+    if file.seek(SeekFrom::Start(start)).is_err() || file.take(LOG_TAIL_BYTES).read_to_end(&mut bytes).is_err() {
+        return String::new();
+    }
+    let text = String::from_utf8_lossy(&bytes);
+    // A cut first line is dropped, unless it is all there is.
+    match text.split_once('\n') {
+        Some((_, rest)) if start > 0 => rest.to_owned(),
+        _ => text.into_owned(),
+    }
+}
+
+/// Free bytes for an unprivileged writer on the file system holding `dir`.
+#[cfg(unix)]
+fn free_bytes(dir: &Path) -> Option<u64> {
+    let stat = rustix::fs::statvfs(dir).ok()?;
+    Some(stat.f_bavail.saturating_mul(stat.f_frsize))
+}
+
+#[cfg(not(unix))]
+fn free_bytes(_dir: &Path) -> Option<u64> {
+    None
 }
 
 fn read(dir: &Path, batch: &BatchEntry) -> Result<Vec<IrRecord>, StoreError> {

@@ -150,14 +150,13 @@ fn view(shared: &Shared) -> Value {
     let (files, dir) = (shared.files(), shared.dir());
     let snapshot = state::snapshot(&files, &dir, chrono::Utc::now());
     let maps = state::maps_svg(&files, MAP_WIDTH_PX, SNR_SCALE_DB);
-    let recipe = files.manifest.as_ref().map_or("", |m| m.meta.recipe.as_str());
     json!({
         "state": snapshot,
         "status_svg": maps.as_ref().map(|m| &m.0),
         "snr_svg": maps.as_ref().map(|m| &m.1),
         "snr_scale_db": [SNR_SCALE_DB.0, SNR_SCALE_DB.1],
         "spectrum": files.last_commit.as_ref().map(|(_, records)| state::spectra(records)),
-        "log_tail": state::log_tail(&dir, recipe),
+        "log_tail": files.log_tail,
     })
 }
 

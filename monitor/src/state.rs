@@ -2,8 +2,6 @@
 //! remaining-time estimates, the stall flag, disk space, the last point's spectrum and the log's tail.
 
 use std::collections::BTreeMap;
-use std::fs::File;
-use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
 use chrono::{DateTime, SecondsFormat, Utc};
@@ -19,9 +17,6 @@ use crate::follow::RunFiles;
 pub const STALL_FACTOR: f64 = 4.0;
 /// The shortest time without a commit that counts as a stall, s: a mock-lab point takes a fraction of a second.
 pub const STALL_MIN_S: f64 = 30.0;
-/// Bytes of the log's tail shown.
-const LOG_TAIL_BYTES: u64 = 6 * 1024;
-
 /// What a run measures one unit at a time, as its recipe says: grid points (scan) or actuators (calibrate).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Units {
@@ -80,60 +75,24 @@ fn unit_cells<'a>(units: Units, rows: impl Iterator<Item = &'a IrMeta>) -> BTree
     out
 }
 
-/// The run's log (`scan.log`, `calibrate.log`, or any `*.log`) in `dir`.
-fn log_path(dir: &Path, recipe: &str) -> Option<std::path::PathBuf> {
-    let named = dir.join(format!("{recipe}.log"));
-    if named.is_file() {
-        return Some(named);
-    }
-    let entries = std::fs::read_dir(dir).ok()?;
-    entries.filter_map(Result::ok).map(|e| e.path()).find(|p| p.extension().is_some_and(|x| x == "log"))
-}
-
-/// The last lines of the run's log (up to 6 KiB, whole lines), or empty.
-pub fn log_tail(dir: &Path, recipe: &str) -> String {
-    let Some(path) = log_path(dir, recipe) else { return String::new() };
-    let Ok(mut file) = File::open(path) else { return String::new() };
-    let len = file.metadata().map_or(0, |m| m.len());
-    let start = len.saturating_sub(LOG_TAIL_BYTES);
-    let mut bytes = Vec::new();
-    if file.seek(SeekFrom::Start(start)).is_err() || file.take(LOG_TAIL_BYTES).read_to_end(&mut bytes).is_err() {
-        return String::new();
-    }
-    let text = String::from_utf8_lossy(&bytes);
-    // A cut first line is dropped, unless it is all there is.
-    match text.split_once('\n') {
-        Some((_, rest)) if start > 0 => rest.to_owned(),
-        _ => text.into_owned(),
-    }
-}
-
 /// How the run's own log says it last ended, if it did since it last started: `finished` or `stopped`, with the
 /// number of units the run had committed then (its `done=N`).
 fn logged_end(log: &str) -> Option<(&'static str, Option<usize>)> {
     let line = log.lines().rev().find(|l| {
-        l.contains("metaplate::run:") && (l.contains(" started") || l.contains(" finished") || l.contains("stopped"))
+        l.contains("metaplate::run:")
+            && (l.contains(" started") || l.contains(" finished") || l.contains("stopped") || l.contains("run failed"))
     })?;
     let done = line.split_whitespace().find_map(|w| w.strip_prefix("done=")).and_then(|n| n.parse().ok());
-    if line.contains(" started") {
+    // "run failed" first: its message (after it) may name any word.
+    if line.contains("run failed") {
+        Some(("failed", None))
+    } else if line.contains(" started") {
         None
     } else if line.contains(" finished") {
         Some(("finished", done))
     } else {
         Some(("stopped", done))
     }
-}
-
-/// Free bytes for an unprivileged writer on the file system holding `dir`.
-#[cfg(unix)]
-fn free_bytes(dir: &Path) -> Option<u64> {
-    let stat = rustix::fs::statvfs(dir).ok()?;
-    Some(stat.f_bavail.saturating_mul(stat.f_frsize))
-}
-
-#[cfg(not(unix))]
-fn free_bytes(_dir: &Path) -> Option<u64> {
-    None
 }
 
 /// The `/api/state` snapshot of the run in `dir` at `now` (fields documented in the crate's documentation).
@@ -173,9 +132,9 @@ pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
     let median_point_s = metaplate_dsp::stats::median(&mut durations.clone());
     let remaining = RemainingTime::estimate(&durations, total - done).map(|r| (r.median_s, r.p90_s));
     let last_s = commit_s.last().copied().or(created_s);
-    let log = log_tail(dir, &meta.recipe);
+    let log = &files.log_tail;
     // The log is read now and the journal at the last poll: an end the journal does not show yet is not taken.
-    let logged = logged_end(&log).filter(|(_, logged_done)| logged_done.is_none_or(|n| n <= done)).map(|(end, _)| end);
+    let logged = logged_end(log).filter(|(_, logged_done)| logged_done.is_none_or(|n| n <= done)).map(|(end, _)| end);
     let status = if done >= total && total > 0 { Some("finished") } else { logged };
     let end_s = if status == Some("finished") { last_s } else { Some(now_s) };
     let elapsed_s = match (created_s, end_s) {
@@ -213,7 +172,7 @@ pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
         "retries": retries,
         "re_measured": re_measured,
         "disk": {
-            "free_bytes": free_bytes(dir),
+            "free_bytes": files.free_bytes,
             "need_bytes": bytes_per_unit.map(|b| (b * (total - done) as f64).ceil() as u64),
         },
         "last_seq": files.journal.commits.last().map(|c| c.seq),
@@ -306,6 +265,9 @@ mod tests {
         assert_eq!(logged_end(&finished), Some(("finished", Some(6))));
         let stopped = format!("{started}x  INFO metaplate::run: stopped on request done=2\n");
         assert_eq!(logged_end(&stopped), Some(("stopped", Some(2))));
+        let failed =
+            format!("{started}x ERROR metaplate::run: run failed error=the DAQ stopped answering; finished 2\n");
+        assert_eq!(logged_end(&failed), Some(("failed", None)));
         let resumed = format!("{started}x  INFO metaplate::run: stopped on request done=2\n{started}");
         assert_eq!(logged_end(&resumed), None);
     }
