@@ -112,6 +112,14 @@ fn kill_9_at_random_instants_then_resume_equals_an_uninterrupted_run() {
         } else if rng.uniform() < 0.2 {
             // Anywhere in start-up: opening the dataset (resume, quarantine), the lab, the instruments.
             Some(spawned + Duration::from_secs_f64(0.6 * rng.uniform()))
+        } else if rng.uniform() < 0.12 {
+            // Inside a commit: the engine's `committing` phase event comes just before the batch file is written;
+            // the test pause then holds the commit between the file's rename and its journal line, where this
+            // lands (a timed kill alone reached that window too rarely under load).
+            let seen = rx.iter().find(|l| l.contains("\"committing\"") || l.contains("\"finished\""));
+            let delay = Duration::from_millis(COMMIT_PAUSE_MS).mul_f64(0.5 + 0.45 * rng.uniform());
+            after_start = true;
+            seen.filter(|l| !l.contains("\"finished\"")).map(|_| Instant::now() + delay)
         } else {
             // After the scan started, or after its first commit (so that the run makes progress), within one
             // point's time: an acquisition, processing, or the next commit.
