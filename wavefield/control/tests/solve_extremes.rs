@@ -111,3 +111,85 @@ fn negative_or_nan_alpha_is_refused() {
         ));
     }
 }
+
+#[test]
+fn a_dead_actuator_gets_no_drive_and_the_others_still_focus() {
+    // Column 3 all zero: a coil that does not move the plate.
+    let mut g = matrix(2, 8, 6);
+    for r in 0..2 {
+        g[(r, 3)] = c(0.0, 0.0);
+    }
+    let v = [c(1.0, 0.0), c(0.0, 0.0)];
+    for reg in [Regularisation::Absolute(0.0), Regularisation::default()] {
+        let a = solve_bin(g.as_ref(), &v, reg, Method::InverseFilter).unwrap();
+        // The minimum-norm (and any Tikhonov) solution has no component on a zero column.
+        assert!(a[3].norm() < 1e-12, "{reg:?}: dead actuator driven with {}", a[3]);
+        assert!(a.iter().all(|z| z.re.is_finite() && z.im.is_finite()));
+    }
+    // Unregularised, the seven live actuators reach both targets exactly.
+    let a = solve_bin(g.as_ref(), &v, Regularisation::Absolute(0.0), Method::InverseFilter).unwrap();
+    assert!(residual(&g, &a, &v) < 1e-12);
+    // Every actuator dead: zero drives, not NaN.
+    let dead = Mat::<Complex64>::zeros(2, 8);
+    let a = solve_bin(dead.as_ref(), &v, Regularisation::default(), Method::InverseFilter).unwrap();
+    assert!(a.iter().all(|z| *z == c(0.0, 0.0)));
+}
+
+#[test]
+fn regularisation_up_to_1e12_s_max_shrinks_the_drive_toward_zero_finitely() {
+    let g = matrix(3, 8, 7);
+    let v = [c(1.0, 0.0), c(0.0, 1.0), c(0.5, 0.0)];
+    let s_max = g.as_ref().singular_values().unwrap()[0];
+    let mut last = f64::INFINITY;
+    for r in [1e-3, 1.0, 1e3, 1e6, 1e12] {
+        let a = solve_bin(g.as_ref(), &v, Regularisation::Relative(r), Method::InverseFilter).unwrap();
+        let norm = a.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
+        assert!(norm.is_finite() && norm <= last, "r {r}: norm {norm} after {last}");
+        // Each direction's gain sigma / (sigma^2 + alpha^2) is at most s_max / alpha^2 = 1 / (r^2 s_max).
+        assert!(norm <= (v.iter().map(|z| z.norm_sqr()).sum::<f64>()).sqrt() / (r * r * s_max) * (1.0 + 1e-9));
+        last = norm;
+    }
+    // At 1e12 s_max the drive is about 1e-24 of the target: far below anything audible, and not NaN or zero by
+    // underflow of the whole vector.
+    assert!(last > 0.0 && last < 1e-20, "{last}");
+}
+
+#[test]
+fn coincident_pixels_with_different_targets_get_the_least_squares_compromise() {
+    // Two pixels at one point asking for opposite things: no drive satisfies both; the minimum-norm least-squares
+    // answer sends the mean (zero) there, finitely.
+    let mut g = matrix(2, 8, 8);
+    for j in 0..8 {
+        g[(1, j)] = g[(0, j)];
+    }
+    let v = [c(1.0, 0.0), c(-1.0, 0.0)];
+    let a = solve_bin(g.as_ref(), &v, Regularisation::Absolute(0.0), Method::InverseFilter).unwrap();
+    let at_point: Complex64 = (0..8).map(|j| g[(0, j)] * a[j]).sum();
+    assert!(at_point.norm() < 1e-12, "{at_point}");
+    assert!(a.iter().all(|z| z.norm() < 1e-12), "the compromise needs no drive at all");
+}
+
+#[test]
+fn a_band_of_one_bin_solves_and_renders_finite_drives() {
+    let bins = 10..11;
+    let m = matrix(4, 8, 9);
+    let mut data = Vec::new();
+    for j in 0..8 {
+        data.extend((0..4).map(|i| m[(i, j)]));
+    }
+    let g = PropagationMatrices::from_parts(bins, 100, 1000.0, (0..4).collect(), (0..8).collect(), data).unwrap();
+    assert_eq!(g.n_bins(), 1);
+    let targets = [PixelTarget { point_index: 2, waveform: Waveform::Impulse { time_s: 0.05 }, amplitude: 1.0 }];
+    let options =
+        FocusOptions { target_band: metaplate_control::target::TargetBand { skirt_hz: 0.0 }, ..Default::default() };
+    let drives = solve_drives(&g, &targets, &options).unwrap();
+    let signals = drives.signals(&g).unwrap();
+    assert_eq!(signals.len(), 8);
+    assert!(signals.iter().flatten().all(|v| v.is_finite()));
+    // The default 25 Hz skirts do not fit in a band of one bin: a typed refusal naming the parameter, not a
+    // target tapered to nothing.
+    assert!(matches!(
+        solve_drives(&g, &targets, &FocusOptions::default()),
+        Err(ControlError::InvalidParameter { name: "skirt_hz", .. })
+    ));
+}
