@@ -127,7 +127,11 @@ impl DrivePlayback {
 ///
 /// # Errors
 /// [`RecipeError::Config`] for rates out of range; [`RecipeError::Dsp`] from the interpolator.
-fn to_audio_rate(signals: &[&[f64]], wiring: &Wiring, daq_rate_hz: f64) -> Result<Vec<Vec<f64>>, RecipeError> {
+pub(crate) fn to_audio_rate(
+    signals: &[&[f64]],
+    wiring: &Wiring,
+    daq_rate_hz: f64,
+) -> Result<Vec<Vec<f64>>, RecipeError> {
     let step = daq_rate_hz / wiring.audio_sample_rate_hz;
     if !(0.5..=2.0).contains(&step) {
         return Err(RecipeError::Config(format!(

@@ -274,6 +274,25 @@ fn every_validation_error_names_file_key_and_reason() {
         (mutate("seed = 20240601\n", ""), Kind::Schema, "", "missing key `seed`"),
         (mutate("seed = 20240601", "seed = -1"), Kind::Schema, "seed", "invalid value"),
         (
+            format!("{METAMATERIAL}\n[setup]\nswapped_actuators = [2, 2]\n"),
+            Kind::Invalid,
+            "setup.swapped_actuators",
+            "two different actuators",
+        ),
+        (
+            format!("{METAMATERIAL}\n[setup]\nswapped_actuators = [0, 8]\n"),
+            Kind::Invalid,
+            "setup.swapped_actuators",
+            "of the 8 (0 to 7)",
+        ),
+        (
+            format!("{METAMATERIAL}\n[setup]\naudio_device_rate_hz = 0.0\n"),
+            Kind::Invalid,
+            "setup.audio_device_rate_hz",
+            "> 0",
+        ),
+        (format!("{METAMATERIAL}\n[setup]\nloopback = false\n"), Kind::Schema, "setup.loopback", "unknown"),
+        (
             mutate("thickness_m = 0.0015", "thickness_m = \"1.5 mm\""),
             Kind::Schema,
             "plate.thickness_m",
@@ -509,4 +528,31 @@ fn scene_id_depends_only_on_the_values() {
     // And a value change is an identity change.
     let thicker = original.replacen("thickness_m = 0.0015", "thickness_m = 0.0016", 1);
     assert_ne!(Scene::from_toml_str(&thicker, "metamaterial.toml").unwrap().id(), s.id());
+}
+
+#[test]
+fn a_setup_table_changes_the_identity_not_the_physics() {
+    let s = Scene::builtin("metamaterial").unwrap();
+    // A correct setup writes no table: the built-ins' identity is the one pinned above.
+    assert!(s.setup.is_correct() && !s.to_toml_string().contains("[setup]"));
+    let text = format!(
+        "{METAMATERIAL}\n[setup]\nswapped_actuators = [2, 5]\nloopback_disconnected = true\n\
+         audio_device_rate_hz = 44100.0\ndisk_free_bytes = 1000000\n"
+    );
+    let faulty = Scene::from_toml_str(&text, "faulty.toml").unwrap();
+    assert_eq!(faulty.setup.swapped_actuators, Some([2, 5]));
+    assert!(faulty.setup.loopback_disconnected);
+    assert_eq!((faulty.setup.audio_device_rate_hz, faulty.setup.disk_free_bytes), (Some(44_100.0), Some(1_000_000)));
+    assert_eq!(Scene::from_toml_str(&faulty.to_toml_string(), "again").unwrap(), faulty, "round trip");
+    assert_ne!(faulty.id(), s.id());
+    assert_eq!(faulty.physics_hash(), s.physics_hash(), "the plate is the same: its Green's functions are shared");
+    // What the plate depends on changes the physics: the seed (resonator spread), the plate.
+    let mut reseeded = s.clone();
+    reseeded.seed += 1;
+    assert_ne!(reseeded.physics_hash(), s.physics_hash());
+    let mut noisier = s.clone();
+    noisier.ldv.noise_rms_m_s *= 10.0;
+    noisier.name = "noisier".into();
+    assert_eq!(noisier.physics_hash(), s.physics_hash());
+    assert_ne!(Scene::builtin("homogeneous").unwrap().physics_hash(), s.physics_hash());
 }

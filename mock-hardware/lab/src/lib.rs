@@ -64,6 +64,13 @@
 //! | `audio_underrun` | audio | silence inserted into the physical playback (visible on the loopback), `PlaybackReport::underruns` |
 //! | `disconnect` | all three (a USB hub glitch) | each device, at its first use after the window's start, fails with `Disconnected` (the DAQ power-cycles, the LDV link drops, the audio stream closes); reopening fails with `Disconnected` until the window's end, then works |
 //!
+//! # Setup mistakes (from the scene's `[setup]`, for `metaplate check` to catch)
+//! The rig's [`Wiring`] stays the nominal one; the lab behind it is cabled as the setup says:
+//! `swapped_actuators = [a, b]` makes the channel wired to actuator `a` drive actuator `b` and the reverse;
+//! `loopback_disconnected` leaves the DAQ's loopback input silent; `audio_device_rate_hz` clocks the mock interface
+//! at another rate than the wiring asks for, so the audio driver refuses to open it. (`disk_free_bytes` is read by
+//! the binary, which owns the disk.)
+//!
 //! # Simplifications
 //! - The beam is read once per playback (at submit): moving it during a playback does not change that playback.
 //! - A DAQ acquisition records only the playbacks submitted during it: the ring-down of an earlier playback (the
@@ -316,11 +323,12 @@ impl MockLab {
         };
         let params = chain::ChainParams {
             seed: scene.seed,
-            actuator_channels: wiring.actuator_channels.clone(),
+            // The physical cabling: the scene's setup may swap two actuators' cables behind the wiring's back.
+            actuator_channels: scene.setup.physical_channels(&wiring.actuator_channels),
             loopback_channel: wiring.loopback_channel,
             velocity_input: wiring.velocity_input,
             loopback_input: wiring.loopback_input,
-            loopback_volts_per_full_scale: lv,
+            loopback_volts_per_full_scale: if scene.setup.loopback_disconnected { 0.0 } else { lv },
             daq_ppm: scene.daq.clock_offset_ppm,
             noise_rms_m_s: scene.ldv.noise_rms_m_s,
             dropout_probability: scene.ldv.dropout_probability,
@@ -395,7 +403,13 @@ impl MockLab {
         let link = links::LabDaqLink::new(transport, Arc::clone(&self.clock), &self.windows, self.shared.clone());
         let daq = DaqDriver::open(link, DriverSettings::default())
             .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
-        let pcm = MockPcm::new(&self.scene.audio, Arc::clone(&self.clock), &self.scene.faults)
+        // The interface runs at its own clock setting, which the setup may have left at another rate than the rig
+        // asks for.
+        let mut audio = self.scene.audio;
+        if let Some(rate_hz) = self.scene.setup.audio_device_rate_hz {
+            audio.sample_rate_hz = rate_hz;
+        }
+        let pcm = MockPcm::new(&audio, Arc::clone(&self.clock), &self.scene.faults)
             .with_observer(Arc::new(self.shared.clone()));
         Ok(Rig {
             vibrometer,

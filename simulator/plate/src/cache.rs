@@ -1,4 +1,6 @@
-//! On-disk cache of Green's functions, keyed by the scene's content hash, the model options and the request.
+//! On-disk cache of Green's functions, keyed by the scene's physics hash ([`Scene::physics_hash`]: what the plate
+//! depends on, so scenes that differ only in their instruments, faults or setup share entries), the model options
+//! and the request.
 //!
 //! Where: only in a directory the caller passes (nothing is written otherwise), one file per key,
 //! `greens-<scene hash>-<request key>.bin` (both 16 hex digits). Format (little-endian): magic `MPGREEN1`, key u64,
@@ -58,7 +60,7 @@ pub fn greens_functions(
         // Before the computation, so that an unusable directory fails at once rather than after it.
         ensure_dir(dir)?;
     }
-    let scene_hash = scene.content_hash();
+    let scene_hash = scene.physics_hash();
     let path = cache_dir.map(|dir| cache_path(dir, scene_hash, cache_key(scene_hash, options, request)));
     if let Some(path) = &path
         && let Some(hit) = load(path, cache_key(scene_hash, options, request), request)?
@@ -310,7 +312,7 @@ mod tests {
             duration_s: 0.05,
             sample_rate_hz: 24_000.0,
         };
-        let hash = scene.content_hash();
+        let hash = scene.physics_hash();
         let path = cache_path(dir, hash, cache_key(hash, &options, &request));
         let ir_len = 1200;
         let stand_in = GreensFunctions {
@@ -331,7 +333,7 @@ mod tests {
         let claim = path.with_extension("computing");
         // Held by a live process (this one), as another test's computation would hold it.
         fs::write(&claim, std::process::id().to_string()).unwrap();
-        let key = cache_key(scene.content_hash(), &options, &request);
+        let key = cache_key(scene.physics_hash(), &options, &request);
         let got = std::thread::scope(|s| {
             s.spawn(|| {
                 std::thread::sleep(std::time::Duration::from_millis(300));

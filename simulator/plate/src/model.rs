@@ -181,7 +181,7 @@ impl PlateModel {
             points,
             grid_len,
             symbolic,
-            scene_hash: scene.content_hash(),
+            scene_hash: scene.physics_hash(),
             options: *options,
         })
     }
@@ -237,7 +237,7 @@ impl PlateModel {
         &self.options
     }
 
-    /// [`Scene::content_hash`] of the scene the model was built from.
+    /// [`Scene::physics_hash`] of the scene the model was built from.
     pub fn scene_hash(&self) -> u64 {
         self.scene_hash
     }

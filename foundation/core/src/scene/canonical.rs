@@ -33,6 +33,30 @@ pub(super) fn canonical_text(scene: &Scene) -> String {
     out
 }
 
+/// Top-level keys of the file form that the simulated plate's response depends on: the seed (resonator spread),
+/// the plate, its supports and resonators, the actuators (positions, magnets) and the grid. Not the name, the
+/// instruments, the faults or the setup.
+const PHYSICS_KEYS: &[&str] = &["seed", "plate", "supports", "resonators", "voice_coil", "actuators", "grid"];
+
+/// The canonical text of the physics of `scene`: as [`canonical_text`], restricted to [`PHYSICS_KEYS`], under its
+/// own version line (`metaplate-scene-physics-v{VERSION}`).
+pub(super) fn physics_text(scene: &Scene) -> String {
+    let mut out = format!("metaplate-scene-physics-v{CANONICAL_FORM_VERSION}\n");
+    match toml::Value::try_from(SceneFile::from(scene.clone())) {
+        Ok(toml::Value::Table(mut table)) => {
+            table.retain(|key, _| PHYSICS_KEYS.contains(&key));
+            write_value(&mut out, "", &toml::Value::Table(table));
+        }
+        Ok(_) => {
+            let _ = writeln!(out, "error = \"not a table\"");
+        }
+        Err(e) => {
+            let _ = writeln!(out, "error = {:?}", e.to_string());
+        }
+    }
+    out
+}
+
 fn write_value(out: &mut String, path: &str, value: &toml::Value) {
     // `write!` to a String cannot fail.
     match value {

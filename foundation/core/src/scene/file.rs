@@ -11,6 +11,7 @@ use super::fault::FaultSpec;
 use super::instruments::{AudioSpec, DaqSpec, LdvSpec};
 use super::plate::PlateSpec;
 use super::resonator::ResonatorSpec;
+use super::setup::SetupSpec;
 use super::support::SupportSpec;
 use super::validate::Problem;
 use crate::grid::GridSpec;
@@ -36,6 +37,8 @@ pub(crate) struct SceneFile {
     audio: AudioSpec,
     #[serde(default)]
     faults: Vec<FaultSpec>,
+    #[serde(default, skip_serializing_if = "SetupSpec::is_correct")]
+    setup: SetupSpec,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -81,6 +84,7 @@ impl SceneFile {
             daq: self.daq,
             audio: self.audio,
             faults: self.faults,
+            setup: self.setup,
         })
     }
 }
@@ -113,6 +117,7 @@ impl From<Scene> for SceneFile {
             daq: scene.daq,
             audio: scene.audio,
             faults: scene.faults,
+            setup: scene.setup,
         }
     }
 }

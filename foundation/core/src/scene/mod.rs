@@ -19,6 +19,7 @@ mod locate;
 mod outline;
 mod plate;
 mod resonator;
+mod setup;
 mod support;
 mod validate;
 
@@ -34,6 +35,7 @@ pub use instruments::{AudioSpec, DaqSpec, LdvSpec};
 pub use outline::{EDGE_TOLERANCE_M, Outline};
 pub use plate::PlateSpec;
 pub use resonator::{MAX_RESONATORS, ResonatorModel, ResonatorSpec};
+pub use setup::SetupSpec;
 pub use support::SupportSpec;
 
 use crate::grid::GridSpec;
@@ -95,6 +97,8 @@ pub struct Scene {
     pub audio: AudioSpec,
     /// Faults the mock hardware injects, in any order.
     pub faults: Vec<FaultSpec>,
+    /// How the lab is set up (cabling, clocking, disk): correct by default.
+    pub setup: SetupSpec,
 }
 
 impl Scene {
@@ -191,6 +195,14 @@ impl Scene {
     /// and whatever version of the `toml` crate, so it can key caches and datasets.
     pub fn content_hash(&self) -> u64 {
         crate::hash::fnv1a_64(self.canonical_text().bytes())
+    }
+
+    /// A stable 64-bit hash (FNV-1a) of what the simulated plate's response depends on alone: the seed, the plate,
+    /// its supports and resonators, the actuators and the grid, in the canonical form; not the name, the
+    /// instruments, the faults or the setup. Caches of the plate's Green's functions key on it, so scenes that
+    /// differ only in their instruments or setup share them.
+    pub fn physics_hash(&self) -> u64 {
+        crate::hash::fnv1a_64(canonical::physics_text(self).bytes())
     }
 
     /// The canonical form the scene's identity hashes: one `path = value` line per leaf of the resolved scene, keys

@@ -68,6 +68,26 @@ impl Scene {
             non_negative(&format!("faults[{i}].at_s"), f.at_s, "s")?;
             non_negative(&format!("faults[{i}].duration_s"), f.duration_s, "s")?;
         }
+        self.check_setup()
+    }
+
+    fn check_setup(&self) -> Check {
+        let s = &self.setup;
+        if let Some([a, b]) = s.swapped_actuators {
+            let n = self.actuators.len();
+            if a == b || a >= n || b >= n {
+                return problem(
+                    "setup.swapped_actuators",
+                    format!(
+                        "must name two different actuators of the {n} (0 to {}), got [{a}, {b}]",
+                        n.saturating_sub(1)
+                    ),
+                );
+            }
+        }
+        if let Some(rate) = s.audio_device_rate_hz {
+            positive("setup.audio_device_rate_hz", rate, "Hz")?;
+        }
         Ok(())
     }
 
