@@ -11,7 +11,7 @@ pub const CACHE_DIR_ENV: &str = "METAPLATE_CACHE_DIR";
 /// The Green's-function cache option of a command (`#[command(flatten)] cache: CacheArgs`).
 #[derive(Args, Debug, Clone, Default)]
 pub struct CacheArgs {
-    /// Directory caching the plate's Green's functions (keyed by the scene's identity and the request; created when
+    /// Directory caching the plate's Green's functions (keyed by the scene's plate and the request; created when
     /// missing), so that a rerun skips the plate model. Default: `$METAPLATE_CACHE_DIR`, else
     /// `$XDG_CACHE_HOME/metaplate`, else `~/.cache/metaplate`.
     #[arg(long, value_name = "DIR")]

@@ -40,7 +40,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     let mut reporter = Reporter::new("calibrate", "actuators", common);
     run::handle_ctrl_c(&control, reporter.bar())?;
     let sites = plate.actuator_sites_m();
-    let result = calibrate(&mut rig, &sites, &config, &common.output(plate.id.clone()), &control, &mut reporter);
+    let result = calibrate(&mut rig, &sites, &config, &common.output(plate.id.clone())?, &control, &mut reporter);
     let results = run::conclude(result, common)?;
     if !common.json {
         for r in &results {

@@ -196,6 +196,7 @@ fn output(dir: &Path, scene: &Scene) -> Output {
         software_version: env!("CARGO_PKG_VERSION").into(),
         resume: false,
         force: false,
+        preflight: None,
     }
 }
 

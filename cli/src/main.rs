@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 mod analyze;
 mod cache;
 mod calibrate;
+mod check;
 mod deconvolve;
 mod demo;
 mod devices;
@@ -51,6 +52,10 @@ enum Command {
     /// What is connected that a hardware file can name (serial ports, USB DAQs, NI-DAQmx devices, ALSA PCMs, HID
     /// keypads), per instrument; --write-hardware drafts a hardware file from it.
     Devices(devices::DevicesArgs),
+    /// The pre-flight of a rig before a night's run (minutes): each instrument answers, the loopback's latency and
+    /// level, the actuators' wiring, the LDV's signal, the clocks' drift, the disk against the run's size and its
+    /// duration; a verdict, and exit 0 only when the run can start.
+    Check(check::CheckArgs),
     /// Deconvolve a recorded WAV by its excitation (or by a loopback channel) into impulse responses.
     Deconvolve(deconvolve::DeconvolveArgs),
     /// Drive signals that focus target waveforms on virtual pixels (multichannel WAV), from a dataset.
@@ -122,6 +127,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Analyze(args) => analyze::run(&args),
         Command::Demo(args) => demo::run(&args),
+        Command::Check(args) => check::run(&args),
         Command::Devices(args) => devices::run(&args),
         Command::Deconvolve(args) => deconvolve::run(&args),
         Command::Focus(args) => focus::run(&args),

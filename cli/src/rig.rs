@@ -85,8 +85,16 @@ pub fn mock_rig(
     seed: Option<u64>,
     cache_dir: Option<PathBuf>,
 ) -> Result<(MockLab, Rig), RigError> {
-    let options = LabOptions { seed, cache_dir, points: Some(points), ..LabOptions::default() };
-    let lab = MockLab::new(&plate.scene, &options).map_err(|e| RigError::Lab(e.to_string()))?;
+    mock_rig_with(plate, &LabOptions { seed, cache_dir, points: Some(points), ..LabOptions::default() })
+}
+
+/// The mock lab of `plate`'s scene with `options` (which points it prepares, how its LDV is served, ...), with its
+/// rig. Keep the lab alive while the rig is used.
+///
+/// # Errors
+/// [`RigError::Lab`] with the lab's reason.
+pub fn mock_rig_with(plate: &Plate, options: &LabOptions) -> Result<(MockLab, Rig), RigError> {
+    let lab = MockLab::new(&plate.scene, options).map_err(|e| RigError::Lab(e.to_string()))?;
     let rig = lab.rig().map_err(|e| RigError::Lab(e.to_string()))?;
     Ok((lab, rig))
 }

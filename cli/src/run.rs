@@ -86,6 +86,10 @@ pub struct RunArgs {
     /// median time between commits so far, at least 120 s; 900 s before the first commit).
     #[arg(long, requires = "notify_command", value_parser = positive_seconds)]
     pub stall_after_s: Option<f64>,
+    /// The report `metaplate check --report FILE` wrote before this run: its verdict, when it ran, the failed checks
+    /// and whether it checked this rig and wiring are recorded in the dataset (a resume keeps the first run's).
+    #[arg(long, value_name = "FILE")]
+    pub preflight: Option<PathBuf>,
 }
 
 /// A finite number of seconds above zero.
@@ -97,16 +101,37 @@ fn positive_seconds(text: &str) -> Result<f64, String> {
 }
 
 impl RunArgs {
-    /// The recipe's output for `scene`.
-    pub fn output(&self, scene: SceneId) -> Output {
-        Output {
+    /// The recipe's output for `scene`, with the pre-flight report of `--preflight` if given.
+    ///
+    /// # Errors
+    /// The report cannot be read or is not a pre-flight report.
+    pub fn output(&self, scene: SceneId) -> anyhow::Result<Output> {
+        Ok(Output {
             dir: self.out.clone(),
             scene,
             software_version: env!("CARGO_PKG_VERSION").to_string(),
             resume: self.resume,
             force: self.force,
-        }
+            preflight: self.preflight.as_deref().map(read_preflight).transpose()?,
+        })
     }
+}
+
+/// Reads a report `metaplate check --report` wrote; says so when its verdict is not a pass (the run still starts:
+/// the dataset records the verdict).
+fn read_preflight(path: &Path) -> anyhow::Result<serde_json::Value> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading the pre-flight report {}", path.display()))?;
+    let report: serde_json::Value = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not a pre-flight report (not JSON)", path.display()))?;
+    match report["verdict"].as_str() {
+        Some("pass") => {}
+        Some(verdict) => {
+            eprintln!("warning: the pre-flight in {} says `{verdict}`; the dataset records it", path.display());
+        }
+        None => anyhow::bail!("{} is not a pre-flight report (no `verdict`)", path.display()),
+    }
+    Ok(report)
 }
 
 /// A log file that is created only once the dataset exists: the store refuses to create a dataset in a directory

@@ -77,7 +77,7 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     let control = RunControl::new();
     let mut reporter = Reporter::new("scan", "points", common);
     run::handle_ctrl_c(&control, reporter.bar())?;
-    let output = common.output(plate.id.clone());
+    let output = common.output(plate.id.clone())?;
     let result = scan(&mut rig, &plan, calibration.as_ref(), &config, &output, &control, &mut reporter);
     let summary = run::conclude(result, common)?;
     if !common.json {
@@ -107,6 +107,6 @@ pub fn protocol_help() -> String {
 }
 
 /// The scan plan over `plate`'s grid and mask, on the `subset` if given.
-fn plan(plate: &Plate, subset: Option<GridSubset>) -> anyhow::Result<ScanPlan> {
+pub fn plan(plate: &Plate, subset: Option<GridSubset>) -> anyhow::Result<ScanPlan> {
     Ok(ScanPlan::new(plate.scene.grid, &plate.scene.grid_mask(), subset.map(Into::into))?)
 }

@@ -153,6 +153,7 @@ fn measure(
         software_version: env!("CARGO_PKG_VERSION").into(),
         resume: false,
         force: false,
+        preflight: None,
     };
     let actuators = scene.actuators.len();
     let nominal = protocol.nominal_time_per_point_s(actuators);

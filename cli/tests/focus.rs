@@ -105,6 +105,7 @@ fn calibration(dir: &Path) -> PathBuf {
         software_version: "test".into(),
         resume: false,
         force: false,
+        preflight: None,
     };
     let sites: Vec<(f64, f64)> = scene.actuators.iter().map(|a| (a.x_m, a.y_m)).collect();
     calibrate(&mut rig, &sites, &CalibrationConfig::default(), &out, &RunControl::new(), &mut Silent).unwrap();

@@ -106,7 +106,7 @@ impl Follower {
         let log_stamp = log.as_deref().and_then(stamp_of);
         if log_stamp != self.log_stamp {
             self.files.log_tail = log.as_deref().map(log_tail).unwrap_or_default();
-            self.files.free_bytes = free_bytes(&self.dir);
+            self.files.free_bytes = metaplate_store::free_bytes(&self.dir);
             self.log_stamp = log_stamp;
             changed = true;
         }
@@ -118,7 +118,7 @@ impl Follower {
             Ok(()) => {
                 self.stamp = stamp;
                 self.files.problem = None;
-                self.files.free_bytes = free_bytes(&self.dir);
+                self.files.free_bytes = metaplate_store::free_bytes(&self.dir);
             }
             // Left unstamped, so that the next poll tries again.
             Err(e) => self.files.problem = Some(e.to_string()),
@@ -202,18 +202,6 @@ fn log_tail(path: &Path) -> String {
         Some((_, rest)) if start > 0 => rest.to_owned(),
         _ => text.into_owned(),
     }
-}
-
-/// Free bytes for an unprivileged writer on the file system holding `dir`.
-#[cfg(unix)]
-fn free_bytes(dir: &Path) -> Option<u64> {
-    let stat = rustix::fs::statvfs(dir).ok()?;
-    Some(stat.f_bavail.saturating_mul(stat.f_frsize))
-}
-
-#[cfg(not(unix))]
-fn free_bytes(_dir: &Path) -> Option<u64> {
-    None
 }
 
 fn read(dir: &Path, batch: &BatchEntry) -> Result<Vec<IrRecord>, StoreError> {

@@ -62,6 +62,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         software_version: env!("CARGO_PKG_VERSION").into(),
         resume: false,
         force: false,
+        preflight: None,
     };
     let mut rig = lab.rig()?;
     let started = Instant::now();

@@ -7,6 +7,7 @@ use metaplate_store::{BATCH_DIR, DatasetMeta, DatasetWriter, IfExists, MANIFEST_
 
 use crate::error::RecipeError;
 use crate::events::RunControl;
+use crate::preflight::PREFLIGHT_KEY;
 
 /// The output of a run: a dataset directory and how to treat what is already there.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -21,6 +22,10 @@ pub struct Output {
     pub resume: bool,
     /// With `resume`: continue even when the configuration changed (the change is still reported).
     pub force: bool,
+    /// The report of the pre-flight check that ran before this run (`metaplate check --report`), if any: its
+    /// verdict is recorded in the configuration ([`crate::preflight::manifest_record`]). A resume keeps the one
+    /// recorded when the run started.
+    pub preflight: Option<serde_json::Value>,
 }
 
 /// An open dataset: the writer and the (point, actuator) keys already committed.
@@ -59,7 +64,8 @@ pub(crate) fn open(out: &Output, meta: DatasetMeta, control: &RunControl) -> Res
 /// Resumption through the store's journal: it verifies the configuration (refusing a change unless `force`,
 /// saying what changed), the committed files (quarantining a corrupt one, whose points are then measured again) and
 /// returns the keys committed.
-fn resume(out: &Output, meta: DatasetMeta) -> Result<Opened, RecipeError> {
+fn resume(out: &Output, mut meta: DatasetMeta) -> Result<Opened, RecipeError> {
+    keep_recorded_preflight(&out.dir, &mut meta);
     let (writer, report) = DatasetWriter::resume(&out.dir, &meta, out.force)?;
     for difference in &report.forced_differences {
         tracing::warn!(%difference, "configuration changed; resuming anyway (--force)");
@@ -72,4 +78,17 @@ fn resume(out: &Output, meta: DatasetMeta) -> Result<Opened, RecipeError> {
     }
     tracing::info!(committed = report.committed.len(), elapsed_s = report.elapsed_s, "resumed");
     Ok(Opened { writer, committed: report.committed.clone(), report: Some(report) })
+}
+
+/// The pre-flight belongs to the run's start: a resume compares its configuration with the one recorded, pre-flight
+/// included, so it takes the recorded one (or none) whatever this invocation was given.
+fn keep_recorded_preflight(dir: &Path, meta: &mut DatasetMeta) {
+    let recorded = metaplate_store::Manifest::read(dir).ok().and_then(|m| m.meta.config.get(PREFLIGHT_KEY).cloned());
+    let given = meta.config.remove(PREFLIGHT_KEY);
+    if given.is_some() && given != recorded {
+        tracing::warn!("the pre-flight given is ignored: a resumed run keeps the one recorded when it started");
+    }
+    if let Some(recorded) = recorded {
+        meta.config.insert(PREFLIGHT_KEY.into(), recorded);
+    }
 }

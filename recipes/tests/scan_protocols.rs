@@ -27,6 +27,7 @@ fn run(protocol: &str, nx: usize, ny: usize) -> (Vec<f64>, f64, ScanSummary, Vec
         software_version: "test".into(),
         resume: false,
         force: false,
+        preflight: None,
     };
     let cfg = ScanConfig { protocol: ExcitationProtocol::by_name(protocol).unwrap(), seed: 7, ..ScanConfig::default() };
     let summary = scan(&mut rig, &plan, None, &cfg, &out, &RunControl::new(), &mut Reasons).unwrap();

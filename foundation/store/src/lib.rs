@@ -32,6 +32,7 @@ mod reader;
 pub mod record;
 mod resume;
 pub mod schema;
+mod space;
 pub mod wav;
 mod writer;
 
@@ -47,5 +48,6 @@ pub use reader::{BatchRows, Dataset, ReadOptions};
 pub use record::{IrMeta, IrRecord};
 pub use resume::{Quarantined, ResumeReport};
 pub use schema::{RowKind, Status};
+pub use space::free_bytes;
 pub use wav::{export_wav, read_wav, write_wav_f32};
 pub use writer::{DatasetWriter, IfExists, QUARANTINE_DIR};

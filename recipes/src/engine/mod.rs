@@ -14,7 +14,7 @@ pub mod acquire;
 pub mod aim;
 pub mod plan;
 pub mod reference;
-mod rig_record;
+pub(crate) mod rig_record;
 pub mod run;
 pub mod session;
 

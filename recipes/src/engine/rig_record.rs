@@ -13,7 +13,7 @@ use crate::error::RecipeError;
 /// # Errors
 /// [`RecipeError::Vibrometer`] when the vibrometer does not answer its identity query (the DAQ's and the audio
 /// interface's identities were read when they were opened).
-pub(crate) fn rig_config(rig: &mut Rig) -> Result<Value, RecipeError> {
+pub fn rig_config(rig: &mut Rig) -> Result<Value, RecipeError> {
     let ldv = rig.vibrometer.identify()?;
     let daq = rig.daq.identity();
     let audio = rig.audio.identity();

@@ -54,7 +54,12 @@ pub fn run<P: Plan>(
     observer: &mut dyn Observer,
 ) -> Result<RunReport, RecipeError> {
     let mut meta = plan.meta(out);
-    meta.config.insert("rig".into(), rig_config(rig)?);
+    let rig_record = rig_config(rig)?;
+    if let Some(report) = &out.preflight {
+        let record = crate::preflight::manifest_record(report, &rig_record);
+        meta.config.insert(crate::preflight::PREFLIGHT_KEY.into(), record);
+    }
+    meta.config.insert("rig".into(), rig_record);
     let mut run = Run::open(out, meta, rig.clock.clone(), control)?;
     let (total, done_before) = plan.start(&run.committed_keys);
     run.start(total, done_before, observer);

@@ -59,6 +59,29 @@ pub const MIN_PEAK_FRACTION: f64 = 1e-3;
 /// Disk space a run needs beyond its estimated size, as a factor (the journal, the log, a compaction's copy).
 pub const DISK_MARGIN: f64 = 1.25;
 
+/// The configuration key under which a run records its pre-flight.
+pub const PREFLIGHT_KEY: &str = "preflight";
+
+/// What a dataset records of the pre-flight `report` (a document `metaplate check --report` wrote: `verdict`,
+/// `checks`, `checked_at`, `software_version`, `rig`): the verdict, when, the failed checks' names, and whether
+/// the rig checked is the rig of the run (`rig_record`, identities and wiring, as
+/// [`crate::rig_config`] gives it), so a verdict from another rig or cabling reads as such.
+pub fn manifest_record(report: &Value, rig_record: &Value) -> Value {
+    let failed: Vec<&str> = report["checks"]
+        .as_array()
+        .map(|checks| {
+            checks.iter().filter(|c| c["passed"] != Value::Bool(true)).filter_map(|c| c["name"].as_str()).collect()
+        })
+        .unwrap_or_default();
+    json!({
+        "verdict": report["verdict"].as_str().unwrap_or("unknown"),
+        "checked_at": report["checked_at"],
+        "software_version": report["software_version"],
+        "failed": failed,
+        "same_rig": report.get("rig") == Some(rig_record),
+    })
+}
+
 /// What the check needs to know of the plate and of the planned run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PreflightConfig {
@@ -400,6 +423,20 @@ mod tests {
         assert_eq!(report.verdict(), "fail");
         assert_eq!(report.verdict_line(), "fail: loopback (1 of 2 passed)");
         assert_eq!(report.to_json()["checks"][1]["passed"], false);
+    }
+
+    #[test]
+    fn the_manifest_records_the_verdict_the_failures_and_whether_the_rig_is_the_same() {
+        let rig = json!({"wiring": {"actuator_channels": [0, 1]}});
+        let report = json!({"verdict": "fail", "checked_at": "2026-11-25T01:00:00Z", "software_version": "0.1.0",
+            "checks": [{"name": "wiring", "passed": true}, {"name": "loopback", "passed": false}], "rig": rig});
+        let record = manifest_record(&report, &rig);
+        assert_eq!(record["verdict"], "fail");
+        assert_eq!(record["failed"], json!(["loopback"]));
+        assert_eq!(record["same_rig"], true);
+        let recabled = json!({"wiring": {"actuator_channels": [1, 0]}});
+        assert_eq!(manifest_record(&report, &recabled)["same_rig"], false);
+        assert_eq!(manifest_record(&json!({}), &rig)["verdict"], "unknown");
     }
 
     #[test]

@@ -37,7 +37,14 @@ pub fn lab_and_plan(scene: &Scene, nx: usize, ny: usize) -> (MockLab, ScanPlan) 
 
 /// The output of a run of `scene` into `dir`.
 pub fn output(dir: &Path, scene: &Scene, resume: bool) -> Output {
-    Output { dir: dir.to_path_buf(), scene: scene.id(), software_version: "test".into(), resume, force: false }
+    Output {
+        dir: dir.to_path_buf(),
+        scene: scene.id(),
+        software_version: "test".into(),
+        resume,
+        force: false,
+        preflight: None,
+    }
 }
 
 /// The first `n` points of `plan` (in its order).

@@ -5,6 +5,13 @@
 //! schedule and a random seed. All quantities are SI (lengths in metres, frequencies in hertz); the unit is in each
 //! key's name. Coordinates are centred on the plate's centre, x along the long axis.
 //!
+//! An optional `[setup]` table ([`SetupSpec`]) injects the mistakes of a bench that `metaplate check` must catch:
+//! `swapped_actuators = [a, b]` (two actuators' cables swapped at the amplifier), `loopback_disconnected = true`
+//! (no loopback cable), `audio_device_rate_hz = 44100.0` (the interface clocked at another rate than the rig asks
+//! for) and `disk_free_bytes = N` (the free space the lab computer reports). A low LDV signal is the vibrometer's
+//! `ldv.speckle_mean_level` (a plate without retroreflective tape reads 0.05 to 0.1). A correct setup is the
+//! default and writes no table.
+//!
 //! The built-in scenes are the paper's two plates, `metamaterial` and `homogeneous` (files in `foundation/core/scenes/`).
 //! A user's file is checked key by key: an unknown key, a missing key, a value of the wrong type or outside its
 //! valid range is a [`SceneError`] naming the file, line and key path, never a panic.
