@@ -14,6 +14,7 @@ use clap::Args;
 use metaplate_core::grid::GridSubset;
 use metaplate_core::rig::Rig;
 use metaplate_dsp::excitation::ExcitationProtocol;
+use metaplate_keypad::{HidInput, Keypad};
 use metaplate_lab::{LabOptions, LdvLink};
 use metaplate_recipes::preflight::{CheckOutcome, PlannedRun, PreflightConfig, preflight};
 use metaplate_recipes::{ScanPlan, rig_config};
@@ -51,6 +52,9 @@ pub struct CheckArgs {
     /// Seed of the mock lab (default: the scene's).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// With --hardware and a keypad in the file: wait this long for a key press on it (0: only check it opened).
+    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    pub keypad_wait_s: f64,
     /// With --scene: serve the mock LDV on a pseudo-terminal and drive it through the real serial transport.
     #[arg(long, requires = "scene")]
     pub ldv_pty: bool,
@@ -68,11 +72,16 @@ const PREPARE_WHOLE_PLAN_POINTS: usize = 64;
 /// Runs `metaplate check`.
 pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     let protocol = ExcitationProtocol::by_name(&args.protocol)?;
+    if !(args.keypad_wait_s.is_finite() && args.keypad_wait_s >= 0.0) {
+        anyhow::bail!("--keypad-wait-s {} must be finite and >= 0", args.keypad_wait_s);
+    }
+    let mut keypad = None;
     let (plate, mut rig, _lab, plan, disk_budget) = match (&args.source.scene, &args.source.hardware) {
         (_, Some(file)) => {
-            let (plate, rig) = rig::hardware_rig(file)?;
+            let (plate, opened) = rig::hardware_rig_and_keypad(file)?;
+            keypad = opened.keypad;
             let plan = plan(&plate, args.grid)?;
-            (plate, rig, None, plan, None)
+            (plate, opened.rig, None, plan, None)
         }
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
@@ -110,11 +119,20 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     if !json_out {
         eprintln!("pre-flight of {} ({} points planned):", plate.id.name, plan.points.len());
     }
-    let report = preflight(&mut rig, &config, &mut |c: &CheckOutcome| {
+    let mut print = |c: &CheckOutcome| {
         if !json_out {
             eprintln!("  {} {}: {}", if c.passed { "ok  " } else { "FAIL" }, c.name, c.message);
         }
-    })?;
+    };
+    let mut report = preflight(&mut rig, &config, &mut print)?;
+    if let Some(keypad) = keypad.as_mut() {
+        if !json_out && args.keypad_wait_s > 0.0 {
+            eprintln!("  press a key on the response keypad (waiting {} s)", args.keypad_wait_s);
+        }
+        let outcome = keypad_check(keypad, args.keypad_wait_s);
+        print(&outcome);
+        report.checks.push(outcome);
+    }
     let mut document = report.to_json();
     if let Some(object) = document.as_object_mut() {
         object.insert("checked_at".into(), json!(chrono::Utc::now().to_rfc3339()));
@@ -134,6 +152,23 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         std::process::exit(EXIT_FLAGGED);
     }
     Ok(())
+}
+
+/// The keypad answers: with `wait_s > 0` a key pressed within that time, otherwise only that it opened.
+fn keypad_check(keypad: &mut Keypad<impl HidInput>, wait_s: f64) -> CheckOutcome {
+    let (vendor, product, serial) = keypad.transport().describe();
+    let who = format!("{vendor} {product} (serial {serial})");
+    let details = json!({"vendor": vendor, "product": product, "serial": serial, "waited_s": wait_s});
+    if wait_s == 0.0 {
+        let message = format!("{who} opened; its keys were not tested (--keypad-wait-s 10 to test them)");
+        return CheckOutcome { name: "keypad", passed: true, message, details };
+    }
+    let (passed, message) = match keypad.next_event(wait_s) {
+        Ok(Some(event)) => (true, format!("{who} answers: key 0x{:02x} {:?}", event.key.usage(), event.action)),
+        Ok(None) => (false, format!("{who} opened, but no key was pressed within {wait_s} s: is it the right device?")),
+        Err(e) => (false, format!("{who}: {e}")),
+    };
+    CheckOutcome { name: "keypad", passed, message, details }
 }
 
 /// The rig as the datasets record it (identities and wiring), or why it could not be read.
@@ -158,4 +193,62 @@ fn ldv_points(plan: &ScanPlan) -> Vec<usize> {
     let mut points: Vec<usize> = (1..=LDV_POINTS).map(|k| plan.points[(k * n / (LDV_POINTS + 1)).min(n - 1)]).collect();
     points.dedup();
     points
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
+
+    use std::sync::Arc;
+
+    use metaplate_core::clock::VirtualClock;
+    use metaplate_keypad::{ReportPrefix, TransportError};
+
+    use super::*;
+
+    /// A keypad that sends `reports` (each after `after_s` of virtual time), then nothing.
+    struct ScriptedPad {
+        clock: Arc<VirtualClock>,
+        reports: Vec<(f64, Vec<u8>)>,
+    }
+
+    impl HidInput for ScriptedPad {
+        fn describe(&self) -> (String, String, String) {
+            ("Acme".into(), "Pad".into(), "7".into())
+        }
+
+        fn read_report(&mut self, timeout_s: f64) -> Result<Option<Vec<u8>>, TransportError> {
+            match self.reports.first() {
+                Some((after_s, _)) if *after_s <= timeout_s => {
+                    self.clock.advance(*after_s);
+                    Ok(Some(self.reports.remove(0).1))
+                }
+                _ => {
+                    self.clock.advance(timeout_s);
+                    Ok(None)
+                }
+            }
+        }
+
+        fn reopen(&mut self) -> Result<(), TransportError> {
+            Ok(())
+        }
+    }
+
+    fn pad(reports: Vec<(f64, Vec<u8>)>) -> Keypad<ScriptedPad> {
+        let clock = Arc::new(VirtualClock::new());
+        Keypad::new(ScriptedPad { clock: Arc::clone(&clock), reports }, clock, ReportPrefix::None)
+    }
+
+    #[test]
+    fn a_key_pressed_in_time_passes_and_silence_fails_by_name() {
+        // Boot keyboard report: modifiers, reserved, six key slots; 0x1e is the key `1`.
+        let press = vec![0, 0, 0x1e, 0, 0, 0, 0, 0];
+        let outcome = keypad_check(&mut pad(vec![(2.0, press.clone())]), 10.0);
+        assert!(outcome.passed && outcome.message.contains("key 0x1e Down"), "{}", outcome.message);
+        let late = keypad_check(&mut pad(vec![(12.0, press)]), 10.0);
+        assert!(!late.passed && late.message.contains("no key was pressed within 10 s"), "{}", late.message);
+        let unasked = keypad_check(&mut pad(Vec::new()), 0.0);
+        assert!(unasked.passed && unasked.message.contains("not tested"), "{}", unasked.message);
+    }
 }

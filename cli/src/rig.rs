@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use metaplate_core::rig::Rig;
 use metaplate_core::scene::Scene;
-use metaplate_drivers::{HardwareError, HardwareFile};
+use metaplate_drivers::{HardwareError, HardwareFile, OpenedRig};
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_store::SceneId;
 
@@ -107,6 +107,17 @@ pub fn mock_rig_with(plate: &Plate, options: &LabOptions) -> Result<(MockLab, Ri
 /// [`RigError::Hardware`] for the file, a backend this build lacks, or the first instrument that cannot be opened;
 /// [`RigError::Plate`] when the wiring does not fit the plate; the plate scene's error.
 pub fn hardware_rig(path: &Path) -> anyhow::Result<(Plate, Rig)> {
+    // A keypad, if the file names one, is opened too (so that its absence is found now) and unused: no recipe
+    // reads it yet.
+    let (plate, opened) = hardware_rig_and_keypad(path)?;
+    Ok((plate, opened.rig))
+}
+
+/// As [`hardware_rig`], with the keypad the file names, if any ([`OpenedRig::keypad`]).
+///
+/// # Errors
+/// As [`hardware_rig`].
+pub fn hardware_rig_and_keypad(path: &Path) -> anyhow::Result<(Plate, OpenedRig)> {
     let file = HardwareFile::load(path).map_err(RigError::Hardware)?;
     let plate = Plate::resolve(&file.plate)?;
     let actuators = file.wiring.actuator_channels.len();
@@ -118,10 +129,8 @@ pub fn hardware_rig(path: &Path) -> anyhow::Result<(Plate, Rig)> {
         );
         return Err(RigError::Plate { path: path.to_path_buf(), reason }.into());
     }
-    // A keypad, if the file names one, is opened too (so that its absence is found now) and unused: no recipe
-    // reads it yet.
     let opened = metaplate_drivers::open_rig(&file).map_err(RigError::Hardware)?;
-    Ok((plate, opened.rig))
+    Ok((plate, opened))
 }
 
 #[cfg(test)]

@@ -7,8 +7,10 @@ use std::path::Path;
 /// run's directory before its first run), on the file system of its nearest existing ancestor. `None` when it
 /// cannot be read (no such ancestor, or a platform without `statvfs`).
 pub fn free_bytes(path: &Path) -> Option<u64> {
-    let existing = path.ancestors().find(|p| p.exists())?;
-    statvfs_free(if existing.as_os_str().is_empty() { Path::new(".") } else { existing })
+    // A relative path's last ancestor is the empty path: the current directory.
+    let here = |p: &'_ Path| if p.as_os_str().is_empty() { Path::new(".").to_path_buf() } else { p.to_path_buf() };
+    let existing = path.ancestors().map(here).find(|p| p.exists())?;
+    statvfs_free(&existing)
 }
 
 #[cfg(unix)]
