@@ -137,12 +137,14 @@ pub fn lattice_of(g: &PropagationMatrices, grid: &GridSpec) -> Result<Lattice, A
 }
 
 /// The paper's k-space wavelength at bin `k`: each actuator's field over the measured points, averaged over
-/// actuators ("the mean of these statistics across actuators"). The fields are laid on the points' own lattice
+/// actuators ("the mean of these statistics across actuators"); an actuator whose field is zero (a dead coil) is
+/// left out, and the summary's `actuators` says how many were averaged. The fields are laid on the points' own lattice
 /// ([`Lattice::of_points`]): on the full grid, a subset's unmeasured points between would put spectral images of
 /// the field at high wavenumbers, where the peak search finds them.
 ///
 /// # Errors
-/// As [`lattice_of`], [`estimate_wavelength`] and [`summarise`].
+/// As [`lattice_of`], [`estimate_wavelength`] and [`summarise`]; [`AnalysisError::NoEnergy`] when every actuator's
+/// field is zero.
 pub fn wavelength_at_bin(
     g: &PropagationMatrices,
     grid: &GridSpec,
@@ -158,11 +160,19 @@ pub fn wavelength_at_bin(
     let on = &lattice.grid;
     let points: Vec<usize> = lattice.indices.iter().map(|&p| p as usize).collect();
     let mask = lattice.mask();
-    let estimates = (0..n)
-        .map(|a| {
-            let field = actuator_field(&response, n, a, &points, on.len())?;
-            estimate_wavelength(&field, &mask, on.nx, on.ny, on.spacing_m, &KSpaceOptions::default())
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut estimates = Vec::with_capacity(n);
+    for a in 0..n {
+        let field = actuator_field(&response, n, a, &points, on.len())?;
+        match estimate_wavelength(&field, &mask, on.nx, on.ny, on.spacing_m, &KSpaceOptions::default()) {
+            Ok(estimate) => estimates.push(estimate),
+            // A dead actuator (an all-zero column: a broken coil) has no wave to measure: left out of the mean,
+            // which [`WavelengthSummary::actuators`] counts.
+            Err(AnalysisError::NoEnergy { .. }) => {}
+            Err(e) => return Err(e),
+        }
+    }
+    if estimates.is_empty() {
+        return Err(AnalysisError::NoEnergy { what: "wavelength estimate: every actuator's field is zero" });
+    }
     summarise(&estimates, AcrossActuators::Mean)
 }
