@@ -127,7 +127,11 @@ impl DrivePlayback {
 ///
 /// # Errors
 /// [`RecipeError::Config`] for rates out of range; [`RecipeError::Dsp`] from the interpolator.
-fn to_audio_rate(signals: &[&[f64]], wiring: &Wiring, daq_rate_hz: f64) -> Result<Vec<Vec<f64>>, RecipeError> {
+pub(crate) fn to_audio_rate(
+    signals: &[&[f64]],
+    wiring: &Wiring,
+    daq_rate_hz: f64,
+) -> Result<Vec<Vec<f64>>, RecipeError> {
     let step = daq_rate_hz / wiring.audio_sample_rate_hz;
     if !(0.5..=2.0).contains(&step) {
         return Err(RecipeError::Config(format!(
@@ -311,10 +315,11 @@ pub fn excitation(sweep: &SweepSpec, daq_rate_hz: f64) -> Result<Vec<f64>, Recip
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn wiring() -> Wiring {
+    /// Two actuators on channels 0 and 1, the loopback on 2, four channels opened; the paper's rates.
+    pub(crate) fn wiring() -> Wiring {
         Wiring {
             actuator_channels: vec![0, 1],
             loopback_channel: 2,

@@ -156,7 +156,7 @@ impl From<AudioError> for Fault {
 
 /// Samples per channel of a DAQ block: 0.1 s at 24 kHz, a compromise between transfer overhead and how late a
 /// stop is noticed.
-const BLOCK_LEN_SAMPLES: u32 = 2400;
+pub(crate) const BLOCK_LEN_SAMPLES: u32 = 2400;
 
 /// The rig, configured for recipes: the DAQ on the velocity and loopback inputs, the audio interface at its rate.
 pub struct Instruments<'a> {
