@@ -44,9 +44,9 @@ pub struct PlayArgs {
     /// Where to play: --scene (mock lab) or --hardware FILE.
     #[command(flatten)]
     source: Source,
-    /// Playback level relative to full scale: the drives (peak-normalised to 1) are multiplied by it. The default
-    /// is the recipes' drive peak, 1 dB below full scale, the loudest the rig plays without clipping; the predicted
-    /// velocities scale with it.
+    /// Playback level relative to full scale: the drives (peak-normalised to 1) are multiplied by it, and the
+    /// predicted velocities scale with it. The default is the recipes' drive peak, 1 dB below full scale: the
+    /// headroom the conversion to the audio rate may need between samples.
     #[arg(long, default_value_t = DRIVE_PEAK_FS)]
     level: f64,
     /// Mock lab only: the seed of its noise. Default: the scene's seed.

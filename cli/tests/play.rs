@@ -146,3 +146,17 @@ fn an_unfocusable_pixel_is_refused_by_name() {
         assert!(out.stdout.is_empty(), "{pixel}: {}", String::from_utf8_lossy(&out.stdout));
     }
 }
+
+#[test]
+fn a_hardware_file_goes_through_the_registry() {
+    // The example file names devices this machine does not have: the registry's error, before anything plays.
+    let (cal, scan) = datasets();
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/hardware.example.toml");
+    let args =
+        ["play", "--data", scan.to_str().unwrap(), "--calibration", cal.to_str().unwrap(), "--hardware", example];
+    let out = metaplate(&[&args[..], &["--pixel", "0,-0.03"]].concat());
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("LDV") || stderr.contains("backend"), "{stderr}");
+    assert!(out.stdout.is_empty(), "{}", String::from_utf8_lossy(&out.stdout));
+}

@@ -13,7 +13,7 @@
 //! source samples), before any device is touched: a pattern that would clip is refused and nothing is played.
 //! There is no retry and no recovery: a failed playback is reported, and the caller decides.
 
-use metaplate_core::rig::Rig;
+use metaplate_core::rig::{PlayRecordError, Rig, Wiring};
 use metaplate_dsp::drift::locate_repetitions;
 use metaplate_dsp::sweep::{SweepKind, SweepSpec};
 
@@ -42,6 +42,8 @@ pub struct PatternPlayback {
     marker: Vec<f64>,
     /// The DAQ rate, Hz.
     daq_rate_hz: f64,
+    /// The wiring the buffers were laid out for.
+    wiring: Wiring,
     /// The level applied, relative to full scale.
     pub level: f64,
     /// Peak of the drive buffers at the audio rate, full scale (0 for a silent pattern).
@@ -76,7 +78,7 @@ impl PatternPlayback {
     /// level, an actuator or rates out of range, drives of different lengths or in a different number than
     /// `actuators`; [`RecipeError::Dsp`] from the conversion or the marker.
     pub fn new(
-        wiring: &metaplate_core::rig::Wiring,
+        wiring: &Wiring,
         drives: &[Vec<f64>],
         actuators: &[u16],
         sample_rate_hz: f64,
@@ -140,7 +142,15 @@ impl PatternPlayback {
             buffers[*channel][..drive.len()].copy_from_slice(&drive);
         }
         buffers[wiring.loopback_channel as usize][..loopback_audio.len()].copy_from_slice(&loopback_audio);
-        Ok(Self { buffers, marker, daq_rate_hz, level, peak_fs, duration_s: len as f64 / sample_rate_hz })
+        Ok(Self {
+            buffers,
+            marker,
+            daq_rate_hz,
+            wiring: wiring.clone(),
+            level,
+            peak_fs,
+            duration_s: len as f64 / sample_rate_hz,
+        })
     }
 
     /// Headroom left at the playback's peak, dB (`None` for a silent pattern).
@@ -152,21 +162,21 @@ impl PatternPlayback {
     /// onset in the recorded loopback.
     ///
     /// # Errors
-    /// [`RecipeError::Config`] for a rig wired differently from the one this was prepared for; the devices'
+    /// [`RecipeError::Config`] for a rig wired differently from the wiring this was prepared for; the devices'
     /// errors; [`RecipeError::Device`] when the marker is not found in the loopback (nothing looped back, or later
     /// than [`MAX_LATENCY_S`]).
     pub fn play(&self, rig: &mut Rig) -> Result<Played, RecipeError> {
-        let wiring = rig.wiring.clone();
-        if wiring.audio_channels as usize != self.buffers.len() || wiring.daq_sample_rate_hz != self.daq_rate_hz {
-            return Err(RecipeError::Config("the rig is not the one the pattern was prepared for".into()));
+        let wiring = &self.wiring;
+        if rig.wiring != *wiring {
+            return Err(RecipeError::Config("the rig is not wired as the pattern was prepared for".into()));
         }
         rig.daq.configure(&wiring.daq_config(BLOCK_LEN_SAMPLES))?;
         rig.audio.configure(&wiring.audio_config())?;
         // The marker and the latency the recording must cover; the rest of the pattern plays on unrecorded.
         let record_samples = ((LEAD_S + MARKER_S + MAX_LATENCY_S) * self.daq_rate_hz).ceil() as usize;
         let recording = rig.play_and_record(&self.buffers, record_samples).map_err(|e| match e {
-            metaplate_core::rig::PlayRecordError::Daq(e) => RecipeError::Daq(e),
-            metaplate_core::rig::PlayRecordError::Audio(e) => RecipeError::Audio(e),
+            PlayRecordError::Daq(e) => RecipeError::Daq(e),
+            PlayRecordError::Audio(e) => RecipeError::Audio(e),
             other => RecipeError::Device(other.to_string()),
         })?;
         let position = locate_repetitions(&recording.loopback_v, &self.marker, 1, None, self.daq_rate_hz)
