@@ -75,8 +75,8 @@ impl PatternPlayback {
     ///
     /// # Errors
     /// [`RecipeError::Clipping`] when a drive would exceed full scale at `level`; [`RecipeError::Config`] for a
-    /// level, an actuator or rates out of range, drives of different lengths or in a different number than
-    /// `actuators`; [`RecipeError::Dsp`] from the conversion or the marker.
+    /// level, an actuator or rates out of range, drives of different lengths, non-finite or in a different number
+    /// than `actuators`; [`RecipeError::Dsp`] from the conversion or the marker.
     pub fn new(
         wiring: &Wiring,
         drives: &[Vec<f64>],
@@ -94,6 +94,9 @@ impl PatternPlayback {
         let len = drives.first().map_or(0, Vec::len);
         if drives.iter().any(|d| d.len() != len) || len == 0 {
             return Err(RecipeError::Config("the drives must be non-empty and of one length".into()));
+        }
+        if let Some(k) = drives.iter().position(|d| d.iter().any(|v| !v.is_finite())) {
+            return Err(RecipeError::Config(format!("drive {k} holds a non-finite sample")));
         }
         let channels: Vec<usize> = actuators
             .iter()
@@ -249,6 +252,7 @@ mod tests {
             (drives(), vec![0], 0.5, "2 drives for 1 actuators"),
             (drives(), vec![0, 1], f64::NAN, "level"),
             (vec![vec![0.0; 3], vec![0.0; 4]], vec![0, 1], 0.5, "one length"),
+            (vec![vec![0.0; 3], vec![f64::NAN; 3]], vec![0, 1], 0.5, "drive 1 holds a non-finite sample"),
         ] {
             let err = PatternPlayback::new(&w, &drives, &actuators, 24e3, level).unwrap_err();
             assert!(err.to_string().contains(needle), "{err}");
