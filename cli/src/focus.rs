@@ -22,13 +22,12 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_control::PropagationMatrices;
+use metaplate_control::pixels::{on_plate, snap_pixel};
 use metaplate_control::render::{
     DriveSpectra, FocusOptions, compensate, normalise_peak, predicted_field, solve_drives,
 };
 use metaplate_control::solve::{Method, Regularisation};
 use metaplate_control::target::{PixelTarget, Waveform};
-use metaplate_core::grid::GridSpec;
-use metaplate_core::scene::Scene;
 use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_recipes::Calibration;
 use metaplate_store::Dataset;
@@ -109,6 +108,7 @@ impl Default for RenderOptions {
 }
 
 /// A parsed `--pixel`: position in metres and its waveform text (as `--pixel` takes it after the colon).
+#[derive(Debug, Clone)]
 pub struct PixelSpec {
     /// x on the plate, m.
     pub x_m: f64,
@@ -118,7 +118,7 @@ pub struct PixelSpec {
     pub target: String,
 }
 
-fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
+pub(crate) fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
     let (position, target) = text.split_once(':').unwrap_or((text, "impulse"));
     let Some((x, y)) = position.split_once(',') else { bail!("--pixel `{text}`: expected X_M,Y_M[:TARGET]") };
     let number = |s: &str| s.trim().parse::<f64>().with_context(|| format!("--pixel `{text}`: `{s}` is not a number"));
@@ -127,65 +127,6 @@ fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
         bail!("--pixel `{text}`: coordinates must be finite");
     }
     Ok(PixelSpec { x_m, y_m, target: target.trim().to_owned() })
-}
-
-/// The plate's outline test: the built-in scene's outline when the dataset was made on an unchanged built-in scene
-/// (same name and content hash), else the grid's bounds widened by half a spacing.
-fn on_plate(dataset: &Dataset) -> impl Fn(f64, f64) -> bool {
-    let meta = &dataset.manifest().meta;
-    let scene = Scene::builtin(&meta.scene.name).ok().filter(|s| s.id() == meta.scene);
-    let grid = meta.grid;
-    move |x_m, y_m| match &scene {
-        Some(scene) => scene.plate.outline.contains(x_m, y_m),
-        None => {
-            let h = grid.spacing_m / 2.0;
-            let (x1, y1) = grid.position_m(grid.index(grid.nx - 1, grid.ny - 1));
-            (grid.origin_x_m - h..=x1 + h).contains(&x_m) && (grid.origin_y_m - h..=y1 + h).contains(&y_m)
-        }
-    }
-}
-
-/// Spacing of the measured points along one axis: the smallest positive gap between their coordinates, or the
-/// grid's spacing when all share one coordinate.
-fn lattice_step_m(coords: impl Iterator<Item = f64>, grid: &GridSpec) -> f64 {
-    let mut c: Vec<f64> = coords.collect();
-    c.sort_unstable_by(f64::total_cmp);
-    // Gaps below a micrometre are the same grid column (rounding of the positions).
-    let step = c.windows(2).map(|w| w[1] - w[0]).filter(|&d| d > 1e-6).fold(f64::INFINITY, f64::min);
-    if step.is_finite() { step } else { grid.spacing_m }
-}
-
-/// Snaps a pixel to the nearest measured point (grid flat index), or explains why it cannot.
-fn snap(dataset: &Dataset, spec: &PixelSpec, on_plate: &impl Fn(f64, f64) -> bool) -> anyhow::Result<u32> {
-    let (x, y) = (spec.x_m, spec.y_m);
-    if !on_plate(x, y) {
-        bail!("pixel ({x}, {y}) is off the plate");
-    }
-    let grid = dataset.manifest().meta.grid;
-    let positions: Vec<(u32, (f64, f64))> =
-        dataset.points().iter().map(|&p| (p, grid.position_m(p as usize))).collect();
-    let step_x = lattice_step_m(positions.iter().map(|p| p.1.0), &grid);
-    let step_y = lattice_step_m(positions.iter().map(|p| p.1.1), &grid);
-    let Some(&(point, (px, py))) = positions.iter().min_by(|a, b| dist2(a.1, (x, y)).total_cmp(&dist2(b.1, (x, y))))
-    else {
-        bail!("the dataset has no measured points");
-    };
-    // Half a step of the measured lattice each way, with a little slack for coordinates typed in decimal.
-    let slack = 1.0 + 1e-9;
-    if (px - x).abs() > step_x / 2.0 * slack || (py - y).abs() > step_y / 2.0 * slack {
-        bail!(
-            "pixel ({x}, {y}) is {:.1} mm from the nearest measured point ({px:.4}, {py:.4}), more than half the \
-             measured spacing ({:.1} x {:.1} mm): it lies in a gap of the scan (a support or a masked point)",
-            dist2((px, py), (x, y)).sqrt() * 1e3,
-            step_x * 1e3,
-            step_y * 1e3
-        );
-    }
-    Ok(point)
-}
-
-fn dist2(a: (f64, f64), b: (f64, f64)) -> f64 {
-    (a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)
 }
 
 /// Reads the calibration dataset in `dir` and returns the filters of `actuators` (the dataset's actuator numbers,
@@ -244,7 +185,8 @@ pub fn render(
     options: &RenderOptions,
 ) -> anyhow::Result<Rendered> {
     let on_plate = on_plate(dataset);
-    let points: Vec<u32> = specs.iter().map(|s| snap(dataset, s, &on_plate)).collect::<anyhow::Result<_>>()?;
+    let points: Vec<u32> =
+        specs.iter().map(|s| snap_pixel(dataset, s.x_m, s.y_m, &on_plate)).collect::<Result<_, _>>()?;
     let fs = dataset.sample_rate_hz();
     let ir_len = dataset.ir_len();
     let pad_s = options.pad_s.unwrap_or(ir_len as f64 / fs);

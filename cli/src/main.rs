@@ -17,6 +17,7 @@ mod import;
 mod monitor;
 mod notify;
 mod paper_table;
+mod play;
 mod progress;
 mod replay;
 mod report;
@@ -60,6 +61,9 @@ enum Command {
     Deconvolve(deconvolve::DeconvolveArgs),
     /// Drive signals that focus target waveforms on virtual pixels (multichannel WAV), from a dataset.
     Focus(focus::FocusArgs),
+    /// Play focused targets on the rig (mock lab or hardware) through the calibration: the onset measured on the
+    /// loopback, the predicted peak velocity at each pixel; refuses drives that would clip and unfocusable pixels.
+    Play(play::PlayArgs),
     /// Export a dataset as a universal file (UFF 58 or 58b, with 164 units and 2411 nodes) for modal-analysis
     /// tools, streamed with a progress bar.
     Export(export::ExportArgs),
@@ -131,6 +135,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Devices(args) => devices::run(&args),
         Command::Deconvolve(args) => deconvolve::run(&args),
         Command::Focus(args) => focus::run(&args),
+        Command::Play(args) => play::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Import(args) => import::run(&args),
         Command::Sweep(args) => sweep::run(&args),

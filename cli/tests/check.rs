@@ -9,31 +9,17 @@
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::process::Command;
+
+use common::metaplate;
 use serde_json::Value;
 
 const CHECK: &[&str] = &["check", "--scene", "metamaterial", "--grid", "7x5"];
 /// The checks of a mock-lab pre-flight with a planned run, in order.
 const CHECKS: [&str; 10] =
     ["wiring", "vibrometer", "daq", "audio", "loopback", "clocks", "actuator_wiring", "ldv_signal", "disk", "duration"];
-
-fn cache_dir() -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate"))
-        .args(args)
-        .arg("--cache-dir")
-        .arg(cache_dir())
-        .env("RUST_BACKTRACE", "0")
-        .output()
-        .unwrap()
-}
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()

@@ -315,10 +315,11 @@ pub fn excitation(sweep: &SweepSpec, daq_rate_hz: f64) -> Result<Vec<f64>, Recip
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn wiring() -> Wiring {
+    /// Two actuators on channels 0 and 1, the loopback on 2, four channels opened; the paper's rates.
+    pub(crate) fn wiring() -> Wiring {
         Wiring {
             actuator_channels: vec![0, 1],
             loopback_channel: 2,

@@ -45,6 +45,20 @@ pub enum RecipeError {
         /// What is wrong.
         reason: String,
     },
+    /// A pattern would clip at the requested level: nothing was played.
+    #[error(
+        "the drive would clip: at level {level} its peak is {peak_fs:.3} of full scale ({:.2} dB over); the highest \
+         level that does not clip is {max_level:.4}",
+        20.0 * peak_fs.log10()
+    )]
+    Clipping {
+        /// The level asked for, relative to full scale.
+        level: f64,
+        /// The drives' peak at that level, full scale (above 1).
+        peak_fs: f64,
+        /// The highest level that plays without clipping.
+        max_level: f64,
+    },
     /// The run was stopped on request (Ctrl-C) before it completed; everything committed so far is kept.
     #[error("stopped on request after {committed} committed points; resume to continue")]
     Interrupted {

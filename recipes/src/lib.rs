@@ -16,6 +16,7 @@ pub mod error;
 pub mod events;
 pub mod output;
 pub mod plans;
+pub mod play;
 pub mod preflight;
 pub mod quality;
 pub mod remaining;

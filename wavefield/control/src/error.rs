@@ -80,6 +80,33 @@ pub enum ControlError {
         /// The backend's message.
         reason: String,
     },
+    /// A pixel lies off the plate's outline (or has non-finite coordinates): nothing there can be focused.
+    #[error("pixel ({x_m}, {y_m}) is off the plate")]
+    PixelOffPlate {
+        /// x on the plate, m.
+        x_m: f64,
+        /// y on the plate, m.
+        y_m: f64,
+    },
+    /// A pixel lies farther than half the measured step from the nearest measured point: the focus would land
+    /// elsewhere.
+    #[error(
+        "pixel ({x_m}, {y_m}) is {distance_mm:.1} mm from the nearest measured point ({:.4}, {:.4}), more than half \
+         the measured spacing ({:.1} x {:.1} mm): it lies in a gap of the scan (a support or a masked point)",
+        nearest_m.0, nearest_m.1, step_mm.0, step_mm.1
+    )]
+    PixelInGap {
+        /// x on the plate, m.
+        x_m: f64,
+        /// y on the plate, m.
+        y_m: f64,
+        /// Distance to the nearest measured point, mm.
+        distance_mm: f64,
+        /// The nearest measured point, m.
+        nearest_m: (f64, f64),
+        /// The measured lattice's step along x and y, mm.
+        step_mm: (f64, f64),
+    },
     /// Reading the dataset failed.
     #[error(transparent)]
     Store(#[from] StoreError),

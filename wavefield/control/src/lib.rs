@@ -4,10 +4,12 @@
 //! [`solve`]: per-bin Tikhonov-regularised least squares (by SVD, never the normal equations) and time reversal.
 //! [`target`]: what each pixel should do (impulses, noise, sinusoids, wavelet trains, null) and its spectrum.
 //! [`focal`]: single-pixel focal fields at focus time for many targets at once (one GEMM).
+//! [`pixels`]: where a pixel can be focused (on the plate, near a measured point) and the point it snaps to.
 //! [`render`]: drive signals (Kirkeby compensation, peak normalisation) and the predicted field `v(x, t)`.
 
 pub mod error;
 pub mod focal;
+pub mod pixels;
 pub mod propagation;
 pub mod render;
 pub mod solve;

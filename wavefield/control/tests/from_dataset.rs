@@ -1,4 +1,5 @@
-//! `PropagationMatrices::from_dataset` against a direct FFT of the stored impulse responses.
+//! `PropagationMatrices::from_dataset` against a direct FFT of the stored impulse responses; pixels snapped to the
+//! same small dataset.
 
 #![allow(clippy::unwrap_used)] // tests may unwrap
 
@@ -115,4 +116,25 @@ fn a_sub_band_equals_loading_the_narrower_band() {
     assert!(matches!(narrow.select_band((6000.0, 9000.0)), Err(ControlError::EmptyBand { .. })));
     assert!(matches!(wide.select_band((400.0, 700.0)), Err(ControlError::EmptyBand { .. })));
     assert!(matches!(wide.select_band((700.0, 400.0)), Err(ControlError::InvalidParameter { name: "band_hz", .. })));
+}
+
+#[test]
+fn pixels_snap_to_the_nearest_measured_point_or_are_refused_by_name() {
+    use metaplate_control::pixels::{on_plate, snap_pixel};
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = write_dataset(dir.path());
+    // Not a built-in scene: the outline is the grid's bounds widened by half a spacing (x -2.5 to 17.5 mm, y -2.5
+    // to 12.5 mm); the measured points (0, 0), (15, 5) and (5, 10) mm lie on a 5 mm lattice.
+    let outline = on_plate(&dataset);
+    assert_eq!(snap_pixel(&dataset, 0.001, 0.0, &outline).unwrap(), 0);
+    assert_eq!(snap_pixel(&dataset, 0.0149, 0.0051, &outline).unwrap(), 7);
+    for (x, y) in [(0.05, 0.0), (f64::NAN, 0.0), (0.0, -0.003)] {
+        let err = snap_pixel(&dataset, x, y, &outline).unwrap_err();
+        assert!(matches!(err, ControlError::PixelOffPlate { .. }), "({x}, {y}): {err}");
+    }
+    let err = snap_pixel(&dataset, 0.015, 0.01, &outline).unwrap_err();
+    let ControlError::PixelInGap { distance_mm, nearest_m, step_mm, .. } = err else { panic!("{err}") };
+    assert!((distance_mm - 5.0).abs() < 1e-9 && step_mm == (5.0, 5.0), "{distance_mm} {step_mm:?}");
+    assert!((nearest_m.0 - 0.015).abs() < 1e-12 && (nearest_m.1 - 0.005).abs() < 1e-12, "{nearest_m:?}");
+    assert!(err.to_string().contains("pixel (0.015, 0.01) is 5.0 mm from the nearest measured point"), "{err}");
 }
