@@ -7,47 +7,15 @@
 
 mod common;
 
-use std::path::PathBuf;
 use std::process::Output;
-use std::sync::OnceLock;
 
 use common::metaplate;
 use metaplate_core::scene::Scene;
 use serde_json::Value;
 
-/// The calibration and the scan through it, made once for every test of this file: (calibration, scan).
-fn datasets() -> &'static (PathBuf, PathBuf) {
-    static DATASETS: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
-    DATASETS.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("metaplate-play-test-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let (cal, scan) = (dir.join("cal"), dir.join("scan"));
-        let out = metaplate(&["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let out = metaplate(&[
-            "scan",
-            "--scene",
-            "metamaterial",
-            "--protocol",
-            "quick",
-            "--grid",
-            "3x2",
-            "--seed",
-            "5",
-            "--calibration",
-            cal.to_str().unwrap(),
-            "--out",
-            scan.to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        (cal, scan)
-    })
-}
-
 /// `metaplate play` on the metamaterial mock lab with `extra` arguments.
 fn play(extra: &[&str]) -> Output {
-    let (cal, scan) = datasets();
+    let (cal, scan) = common::calibrated_scan();
     let mut args = vec![
         "play",
         "--data",
@@ -139,7 +107,7 @@ fn an_unfocusable_pixel_is_refused_by_name() {
 #[test]
 fn a_hardware_file_goes_through_the_registry() {
     // The example file names devices this machine does not have: the registry's error, before anything plays.
-    let (cal, scan) = datasets();
+    let (cal, scan) = common::calibrated_scan();
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/hardware.example.toml");
     let args =
         ["play", "--data", scan.to_str().unwrap(), "--calibration", cal.to_str().unwrap(), "--hardware", example];

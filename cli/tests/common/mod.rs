@@ -22,3 +22,63 @@ pub fn metaplate(args: &[&str]) -> Output {
         .output()
         .unwrap()
 }
+
+/// A calibration of the metamaterial mock lab (`calibrate --seed 5`) and a scan through it (`scan --grid 3x2
+/// --protocol quick --seed 5`): (calibration, scan). Made once per build of the binary and shared by every test
+/// process that needs it (play, experiments): the first takes a lock file and builds them in a scratch directory
+/// renamed into place when complete; the others wait for it. Keyed by the binary's modification time, so a rebuilt
+/// binary makes its own.
+pub fn calibrated_scan() -> (PathBuf, PathBuf) {
+    let binary = std::fs::metadata(env!("CARGO_BIN_EXE_metaplate")).unwrap();
+    let stamp = binary.modified().unwrap().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
+    let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fixtures");
+    std::fs::create_dir_all(&root).unwrap();
+    let done = root.join(format!("cal-scan-3x2-seed5-{stamp:x}"));
+    let paths = |dir: &Path| (dir.join("cal"), dir.join("scan"));
+    let lock = done.with_extension("lock");
+    for _ in 0..1200 {
+        if done.is_dir() {
+            return paths(&done);
+        }
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&lock) {
+            Ok(_) => {
+                let scratch = root.join(format!("building-{}", std::process::id()));
+                let _ = std::fs::remove_dir_all(&scratch);
+                std::fs::create_dir_all(&scratch).unwrap();
+                let (cal, scan) = paths(&scratch);
+                let out =
+                    metaplate(&["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]);
+                assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+                let out = metaplate(&[
+                    "scan",
+                    "--scene",
+                    "metamaterial",
+                    "--protocol",
+                    "quick",
+                    "--grid",
+                    "3x2",
+                    "--seed",
+                    "5",
+                    "--calibration",
+                    cal.to_str().unwrap(),
+                    "--out",
+                    scan.to_str().unwrap(),
+                ]);
+                assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+                // The scan records the calibration's content hash, not its path: the pair moves together.
+                std::fs::rename(&scratch, &done).unwrap();
+                std::fs::remove_file(&lock).unwrap();
+                return paths(&done);
+            }
+            // Another process builds it (a lock older than 10 minutes is a dead builder's: taken over).
+            Err(_) => {
+                let age = std::fs::metadata(&lock).and_then(|m| m.modified()).ok().and_then(|t| t.elapsed().ok());
+                if age.is_some_and(|a| a.as_secs() > 600) {
+                    let _ = std::fs::remove_file(&lock);
+                }
+                std::thread::sleep(std::time::Duration::from_millis(500));
+            }
+        }
+    }
+    panic!("the calibrated scan fixture was not built within 10 minutes (lock {})", lock.display());
+}
