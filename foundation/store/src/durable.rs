@@ -145,6 +145,19 @@ pub(crate) fn write_file_into(
     Ok(written)
 }
 
+/// Writes `dir/name` durably with `bytes` (temporary name, fsync, rename, directory fsync): a small file outside a
+/// dataset (an experiment session's plan) that must appear complete or not at all.
+///
+/// # Errors
+/// [`StoreError::Io`] / [`StoreError::DiskFull`] naming the step that failed.
+pub fn write_bytes(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), StoreError> {
+    let path = dir.join(name);
+    write_file(dir, name, &WriteBudget::default(), |sink| {
+        sink.write_all(bytes).map_err(StoreError::io("write", &path))
+    })?;
+    Ok(())
+}
+
 fn write_temp_then_rename(
     temp: &Path,
     target: &Path,
@@ -175,7 +188,7 @@ fn write_temp_then_rename(
 ///
 /// # Errors
 /// [`StoreError::Io`] if the directory cannot be opened or synced.
-pub(crate) fn sync_dir(dir: &Path) -> Result<(), StoreError> {
+pub fn sync_dir(dir: &Path) -> Result<(), StoreError> {
     #[cfg(unix)]
     {
         File::open(dir).and_then(|d| d.sync_all()).map_err(StoreError::io("fsync directory", dir))?;
