@@ -10,6 +10,7 @@ mod calibrate;
 mod deconvolve;
 mod demo;
 mod devices;
+mod experiment;
 mod export;
 mod focus;
 mod import;
@@ -55,6 +56,9 @@ enum Command {
     Deconvolve(deconvolve::DeconvolveArgs),
     /// Drive signals that focus target waveforms on virtual pixels (multichannel WAV), from a dataset.
     Focus(focus::FocusArgs),
+    /// The paper's behavioural experiments: list the built-ins; report session directories (accuracy, Wilson 95 %,
+    /// exact binomial p against chance, confusion matrices; JSON, Parquet, figures).
+    Experiment(experiment::ExperimentArgs),
     /// Export a dataset as a universal file (UFF 58 or 58b, with 164 units and 2411 nodes) for modal-analysis
     /// tools, streamed with a progress bar.
     Export(export::ExportArgs),
@@ -125,6 +129,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Devices(args) => devices::run(&args),
         Command::Deconvolve(args) => deconvolve::run(&args),
         Command::Focus(args) => focus::run(&args),
+        Command::Experiment(args) => experiment::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Import(args) => import::run(&args),
         Command::Sweep(args) => sweep::run(&args),
