@@ -87,6 +87,30 @@ mod tests {
     }
 
     #[test]
+    fn the_pixels_lie_on_both_plates_display_region_next_to_a_measured_point() {
+        use metaplate_core::scene::Scene;
+        for scene in ["metamaterial", "homogeneous"] {
+            let scene = Scene::builtin(scene).unwrap();
+            let measured = scene.measured_points();
+            let inset_m = Scene::builtin("metamaterial").unwrap().resonators.region_inset_m;
+            for name in names() {
+                for p in &builtin(name).unwrap().pixels {
+                    // Inside the resonator region (the display), with a fingertip's radius (8 mm) to spare.
+                    assert!(scene.plate.outline.distance_inside_m(p.x_m, p.y_m) > inset_m + 0.008, "{name}: {p:?}");
+                    let nearest_m = measured
+                        .iter()
+                        .map(|&i| {
+                            let (x, y) = scene.grid.position_m(i);
+                            (x - p.x_m).hypot(y - p.y_m)
+                        })
+                        .fold(f64::INFINITY, f64::min);
+                    assert!(nearest_m <= scene.grid.spacing_m / 2.0 + 1e-12, "{name}: {p:?} {nearest_m}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn the_paper_stimuli_have_the_papers_timing() {
         let one = builtin("pixel-identification").unwrap();
         // 5 bursts of 25 ms with 75 ms pauses: 4 x 100 ms + 25 ms.

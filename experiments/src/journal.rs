@@ -458,6 +458,46 @@ mod tests {
         assert!(!r.torn_tail);
     }
 
+    /// Runs `session` to its end (or `stop_after` trials) with a simulated participant; answers and times depend
+    /// only on the trial.
+    fn answer_all(session: &mut Session, stop_after: usize) {
+        let sim = crate::participant::SimParticipant::parse("sim:seed=4").unwrap();
+        let field = crate::participant::FieldAtPixels { target_peak_m_s: vec![1e-3], other_peak_m_s: vec![4e-4] };
+        let labels = session.header().labels.clone();
+        for _ in 0..stop_after {
+            let Some(t) = session.next_trial().cloned() else { return };
+            let mut entry =
+                record(&session.header().plan, t.index, sim.answer(t.index, &t.correct, &labels, &field).unwrap());
+            if let Entry::Trial(r) = &mut entry {
+                r.trial_time_s = sim.response_time_s(t.index, false);
+            }
+            session.append(&entry).unwrap();
+        }
+    }
+
+    #[test]
+    fn a_session_killed_mid_write_and_resumed_equals_an_uninterrupted_one() {
+        let e = builtin("multi-touch-odd-one-out").unwrap();
+        let plan = Plan::new(&e, 11);
+        let whole = tempfile::tempdir().unwrap();
+        answer_all(&mut Session::start(whole.path(), &e, "sim", plan.clone(), false).unwrap(), usize::MAX);
+        let split = tempfile::tempdir().unwrap();
+        answer_all(&mut Session::start(split.path(), &e, "sim", plan.clone(), false).unwrap(), 23);
+        // The kill: half a line written.
+        let mut f = OpenOptions::new().append(true).open(split.path().join(JOURNAL_FILE)).unwrap();
+        f.write_all(b"{\"event\":\"trial\",\"tri").unwrap();
+        drop(f);
+        answer_all(&mut Session::start(split.path(), &e, "sim", plan.clone(), false).unwrap(), usize::MAX);
+        let (a, b) = (SessionRecord::read(whole.path()).unwrap(), SessionRecord::read(split.path()).unwrap());
+        assert_eq!(a.progress, b.progress);
+        assert_eq!(a.entries, b.entries);
+        assert_eq!(
+            std::fs::read(whole.path().join(JOURNAL_FILE)).unwrap(),
+            std::fs::read(split.path().join(JOURNAL_FILE)).unwrap()
+        );
+        assert_eq!(a.scored().len(), 50);
+    }
+
     #[test]
     fn a_torn_last_line_is_ignored_and_cut_before_the_next_append() {
         let dir = tempfile::tempdir().unwrap();

@@ -1,7 +1,7 @@
 //! Behavioural experiments on the display: the paper's four (Results, "Multi-Pixel Wave Focusing"; Materials and
 //! Methods and Supplementary Methods, "Haptic Perception") and any other written as a file.
 //!
-//! - [`file`]: the experiment file (format below), parsed and validated with file, line, key and reason;
+//! - [`file`](mod@file): the experiment file (format below), parsed and validated with file, line, key and reason;
 //! - [`builtin`]: the paper's four, `pixel-identification`, `odd-one-out-exploration`, `motion-direction`,
 //!   `multi-touch-odd-one-out` (files in `experiments/builtin/`);
 //! - [`plan`]: the full trial plan from a file and a seed, and its hash;
