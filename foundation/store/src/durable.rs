@@ -232,6 +232,16 @@ mod tests {
     }
 
     #[test]
+    fn write_bytes_writes_a_whole_file_and_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        write_bytes(dir.path(), "plan.json", b"{}").unwrap();
+        write_bytes(dir.path(), "plan.json", b"{\"a\": 1}").unwrap();
+        assert_eq!(fs::read(dir.path().join("plan.json")).unwrap(), b"{\"a\": 1}");
+        assert_eq!(entry_names(dir.path()).unwrap(), ["plan.json"]);
+        assert!(write_bytes(&dir.path().join("missing"), "x", b"").is_err());
+    }
+
+    #[test]
     fn replaces_an_existing_file_atomically() {
         let dir = tempfile::tempdir().unwrap();
         fs::write(dir.path().join("m.json"), b"old").unwrap();
