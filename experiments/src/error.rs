@@ -28,25 +28,13 @@ pub enum ExperimentError {
         /// The operating system's reason.
         reason: String,
     },
-    /// The experiment file is not TOML.
-    #[error("{location}: not valid TOML: {message}")]
-    Syntax {
-        /// `origin:line:column`.
-        location: String,
-        /// What the TOML parser expected.
-        message: String,
-    },
+    /// The experiment file is not TOML (where, and what the parser expected; no key path).
+    #[error("{}: not valid TOML: {}", .0.location, .0.message)]
+    Syntax(Located),
     /// The file does not have an experiment's shape (unknown key, missing key, wrong type) or a value is outside its
-    /// valid range.
-    #[error("{location}: {key_path}: {message}")]
-    Invalid {
-        /// `origin:line:column` when the key is in the file, else the origin.
-        location: String,
-        /// Dotted path of the offending key (`stimuli[2].pixels.thumb.burst_s`).
-        key_path: String,
-        /// What was wrong and what is accepted.
-        message: String,
-    },
+    /// valid range: where (`origin:line:column`), the key path (`stimuli[2].pixels.thumb.burst_s`) and why.
+    #[error("{0}")]
+    Invalid(Located),
     /// The session directory's stored plan or experiment file differs from the one given (resume refused).
     #[error(
         "the session in {dir} was started with {what} {stored}, not {given}: resume with the same experiment file \
@@ -115,7 +103,7 @@ impl ExperimentError {
 
 impl From<Located> for ExperimentError {
     fn from(l: Located) -> Self {
-        Self::Invalid { location: l.location, key_path: l.key_path, message: l.message }
+        Self::Invalid(l)
     }
 }
 

@@ -214,8 +214,7 @@ impl Experiment {
     /// [`ExperimentError::Syntax`] (not TOML) or [`ExperimentError::Invalid`] (unknown or missing key, wrong type,
     /// value out of range, a name that does not resolve), each with the line and key path.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, ExperimentError> {
-        let doc = DocIndex::parse(text, origin)
-            .map_err(|l| ExperimentError::Syntax { location: l.location, message: l.message })?;
+        let doc = DocIndex::parse(text, origin).map_err(ExperimentError::Syntax)?;
         let experiment: Experiment = toml::from_str(text).map_err(|e| ExperimentError::from(doc.schema_error(&e)))?;
         experiment.check().map_err(|(key_path, message)| ExperimentError::from(doc.invalid(key_path, message)))?;
         Ok(experiment)
@@ -617,7 +616,7 @@ seed = 1
 
     fn invalid(text: &str) -> (String, String, String) {
         match parse(text) {
-            Err(ExperimentError::Invalid { location, key_path, message }) => (location, key_path, message),
+            Err(ExperimentError::Invalid(l)) => (l.location, l.key_path, l.message),
             other => panic!("expected an invalid-file error, got {other:?}"),
         }
     }
@@ -660,7 +659,10 @@ seed = 1
         assert_eq!(key, "phases.repeats");
         let (_, key, _) = invalid(&MINIMAL.replace("burst_s = 0.025", "burst_s = -0.025"));
         assert_eq!(key, "stimuli[0].pixels.left.burst_s");
-        assert!(matches!(parse("name = "), Err(ExperimentError::Syntax { .. })));
+        assert!(matches!(parse("name = "), Err(ExperimentError::Syntax(_))));
+        // A missing top-level key: no key path, and the message says which key.
+        let missing = parse(&MINIMAL.replace("chance = 0.5\n", "")).unwrap_err().to_string();
+        assert!(missing.starts_with("test.toml:") && missing.contains("missing key `chance`"), "{missing}");
     }
 
     #[test]

@@ -19,6 +19,21 @@ pub struct Located {
     pub message: String,
 }
 
+impl std::fmt::Display for Located {
+    /// `location: key_path: message`, or `location: message` at the top level.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&describe(&self.location, &self.key_path, &self.message))
+    }
+}
+
+impl std::error::Error for Located {}
+
+/// How every located TOML error reads: `location: key_path: message`, or `location: message` when the key path is
+/// empty.
+pub fn describe(location: &str, key_path: &str, message: &str) -> String {
+    if key_path.is_empty() { format!("{location}: {message}") } else { format!("{location}: {key_path}: {message}") }
+}
+
 /// Nesting beyond any file's we read (a scene is at most 4 deep); deeper hostile input is not indexed, to bound
 /// recursion.
 const MAX_DEPTH: usize = 16;
