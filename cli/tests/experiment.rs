@@ -144,3 +144,39 @@ fn report_pools_participants_with_intervals_p_values_parquet_and_figures() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("one experiment at a time"));
 }
+
+/// polars and pyarrow read the report's Parquet: one row per scored trial, the columns named, the `correct` column
+/// summing to the report's count.
+#[test]
+#[ignore = "needs the project's .venv (scripts/install-deps.sh) with polars and pyarrow: run by .ci/run"]
+fn polars_reads_the_trials_parquet() {
+    let root = tempfile::tempdir().unwrap();
+    let dir = root.path().join("p1");
+    let correct = simulate_session(&dir, "motion-direction", "sim:seed=5", 5e-4);
+    let parquet = root.path().join("trials.parquet");
+    let out = metaplate(&["experiment", "report", "--parquet", parquet.to_str().unwrap(), dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let script = format!(
+        "import sys, polars as pl, pyarrow.parquet as pq\n\
+         df = pl.read_parquet(sys.argv[1])\n\
+         assert df.height == 80, df.height\n\
+         assert df['correct'].sum() == {correct}, df['correct'].sum()\n\
+         assert set(df['stimulus_id'].unique().to_list()) >= {{'rightward-640ms', 'leftward-80ms'}}\n\
+         assert pq.read_table(sys.argv[1]).num_rows == 80\n\
+         assert pq.read_metadata(sys.argv[1]).metadata[b'metaplate.experiment'] == b'motion-direction'\n\
+         print('ok')\n"
+    );
+    let out = Command::new(python()).arg("-c").arg(script).arg(&parquet).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && stdout.contains("ok"), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// The interpreter with the cross-check packages: `$METAPLATE_PYTHON`, else the workspace's `.venv`.
+fn python() -> std::path::PathBuf {
+    if let Some(p) = std::env::var_os("METAPLATE_PYTHON") {
+        return p.into();
+    }
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../.venv/bin/python");
+    assert!(venv.exists(), "no {} and no METAPLATE_PYTHON: run scripts/install-deps.sh", venv.display());
+    venv
+}
