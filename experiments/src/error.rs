@@ -35,15 +35,16 @@ pub enum ExperimentError {
     /// valid range: where (`origin:line:column`), the key path (`stimuli[2].pixels.thumb.burst_s`) and why.
     #[error("{0}")]
     Invalid(Located),
-    /// The session directory's stored plan or experiment file differs from the one given (resume refused).
+    /// The session directory's stored participant, plan or experiment file differs from the one given (resume
+    /// refused).
     #[error(
-        "the session in {dir} was started with {what} {stored}, not {given}: resume with the same experiment file \
-         and seed, or force it"
+        "the session in {dir} was started with {what} {stored}, not {given}: resume with the same participant, \
+         experiment file and seed, or force it"
     )]
     SessionMismatch {
         /// The session directory.
         dir: PathBuf,
-        /// `plan hash` or `experiment file hash`.
+        /// `participant`, `plan hash` or `experiment file hash`.
         what: &'static str,
         /// The stored hash.
         stored: String,

@@ -215,8 +215,8 @@ impl Session {
     /// Starts a session of `experiment` for `participant` with `plan` in `dir`, or resumes the one there.
     ///
     /// A new directory gets `plan.json` (durably) and an empty journal before this returns. An existing one is
-    /// resumed when its stored plan hash and experiment file hash equal `plan`'s; otherwise the resume is refused,
-    /// unless `force`, which appends a [`Entry::Forced`] line and continues with the **stored** plan.
+    /// resumed when its stored participant, plan hash and experiment file hash equal these; otherwise the resume is
+    /// refused, unless `force`, which appends a [`Entry::Forced`] line and continues with the **stored** plan.
     ///
     /// # Errors
     /// [`ExperimentError::SessionMismatch`] (a different plan or file, not forced); [`ExperimentError::Io`],
@@ -259,7 +259,9 @@ impl Session {
         let record = SessionRecord::read(dir)?;
         let given_plan_hash = plan.hash();
         let given_file_hash = experiment.file_hash();
-        let mismatch = if record.header.file_hash != given_file_hash {
+        let mismatch = if record.header.participant != participant {
+            Some(("participant", record.header.participant.clone(), participant.to_owned()))
+        } else if record.header.file_hash != given_file_hash {
             Some(("experiment file hash", record.header.file_hash.clone(), given_file_hash.clone()))
         } else if record.header.plan_hash != given_plan_hash {
             Some(("plan hash", record.header.plan_hash.clone(), given_plan_hash.clone()))
@@ -537,6 +539,8 @@ mod tests {
         changed.repeat_pause_s = 1.0;
         let other_file = Session::start(dir.path(), &changed, "P01", Plan::new(&changed, 5), false);
         assert!(matches!(other_file, Err(ExperimentError::SessionMismatch { what: "experiment file hash", .. })));
+        let other_participant = Session::start(dir.path(), &e, "P02", Plan::new(&e, 5), false);
+        assert!(matches!(other_participant, Err(ExperimentError::SessionMismatch { what: "participant", .. })));
         let forced = Session::start(dir.path(), &e, "P01", Plan::new(&e, 6), true).unwrap();
         assert_eq!(forced.header().plan, Plan::new(&e, 5));
         let r = SessionRecord::read(dir.path()).unwrap();
