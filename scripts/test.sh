@@ -3,8 +3,9 @@
 #
 # 1. Every test binary is built, then run by cargo-nextest (tests of all binaries in parallel, 2 at a time on 2
 #    cores), then the doc tests.
-# 2. The cross-checks with independent tools, from the same build: polars and pyarrow read a dataset, pyuff reads our
-#    universal files (`#[ignore]`d in a plain `cargo test`: they need the project's .venv, which install-deps.sh makes).
+# 2. The cross-checks with independent tools, from the same build: polars and pyarrow read a dataset and the
+#    experiment report's trials, pyuff reads our universal files (`#[ignore]`d in a plain `cargo test`: they need the
+#    project's .venv, which install-deps.sh makes).
 # 3. The optional polars reader (store feature `polars`): polars takes minutes to build, so it builds in its own
 #    target directory at the unoptimised `ci-polars` profile while step 1's tests run (its long chain of crates
 #    built one after another would otherwise leave a core idle), and its test runs last.
@@ -23,7 +24,7 @@ trap 'kill "$polars_build" 2>/dev/null || true' EXIT
 
 cargo nextest run --workspace --locked
 cargo test --workspace --locked --doc
-cargo nextest run --workspace --locked --run-ignored only -E 'binary(python_readers) | binary(pyuff_reads)'
+cargo nextest run --workspace --locked --run-ignored only -E 'binary(python_readers) | binary(pyuff_reads) | test(polars_reads_the_trials_parquet)'
 
 if ! wait "$polars_build"; then
     cat "$polars_log" >&2

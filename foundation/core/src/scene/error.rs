@@ -1,5 +1,7 @@
 //! The one error type of scenes.
 
+use crate::toml_locate::describe;
+
 /// Why a scene could not be found, read, parsed or accepted, or why a scene computation refused its argument.
 ///
 /// Every message names where: the file (or built-in) with line and column when known, and the key path inside
@@ -72,8 +74,4 @@ impl SceneError {
             _ => None,
         }
     }
-}
-
-fn describe(location: &str, key_path: &str, message: &str) -> String {
-    if key_path.is_empty() { format!("{location}: {message}") } else { format!("{location}: {key_path}: {message}") }
 }
