@@ -372,6 +372,15 @@ impl Experiment {
                 ));
             }
         }
+        let sine =
+            s.pixels.values().chain(s.sequence.as_ref().map(|q| &q.pattern)).any(|p| matches!(p, Pattern::Sine { .. }));
+        if sine && s.plays > 1 {
+            return Err((
+                at("plays"),
+                "a stimulus with a sine plays once (repeat it with `presentation = \"until-response\"` or on request)"
+                    .into(),
+            ));
+        }
         if s.pixels.values().all(|p| *p == Pattern::Null) && s.sequence.is_none() {
             return Err((at("pixels"), "nothing plays: give at least one pixel a pattern other than null".into()));
         }
@@ -456,35 +465,33 @@ impl Pattern {
             .collect()
     }
 
-    /// Control's waveforms for this pattern over `plays` plays `play_period_s` apart, delayed by `offset_s`; noise
-    /// drawn from `seed`. A sine over several plays is one waveform per play (control's sine is one span).
-    fn waveforms(&self, offset_s: f64, plays: u32, play_period_s: f64, seed: u64) -> Vec<Waveform> {
+    /// Control's waveform for this pattern over `plays` plays `play_period_s` apart, delayed by `offset_s`; noise
+    /// drawn from `seed`. A sine plays once (validation refuses a sine in a stimulus of several plays: control's
+    /// sine is one span).
+    fn waveform(&self, offset_s: f64, plays: u32, play_period_s: f64, seed: u64) -> Waveform {
         let starts = self.element_starts(offset_s, plays, play_period_s);
         match self {
-            Self::NoiseBursts { burst_s, .. } => {
-                vec![Waveform::NoiseBursts { starts_s: starts, duration_s: *burst_s, seed }]
-            }
-            Self::Wavelets { freq_hz, wavelet_s, .. } => vec![Waveform::WaveletTrain {
+            Self::NoiseBursts { burst_s, .. } => Waveform::NoiseBursts { starts_s: starts, duration_s: *burst_s, seed },
+            Self::Wavelets { freq_hz, wavelet_s, .. } => Waveform::WaveletTrain {
                 freq_hz: *freq_hz,
                 cycles: wavelet_s * freq_hz,
                 times_s: starts.iter().map(|t| t + wavelet_s / 2.0).collect(),
-            }],
-            Self::Sine { freq_hz, duration_s, .. } => starts
-                .into_iter()
-                .map(|start_s| Waveform::Sine { freq_hz: *freq_hz, start_s, duration_s: *duration_s })
-                .collect(),
-            Self::Null => vec![Waveform::Null],
+            },
+            Self::Sine { freq_hz, duration_s, start_s } => {
+                Waveform::Sine { freq_hz: *freq_hz, start_s: offset_s + start_s, duration_s: *duration_s }
+            }
+            Self::Null => Waveform::Null,
         }
     }
 }
 
-/// What one pixel does over a whole presentation, as control's waveforms.
+/// What one pixel does over a whole presentation, as control's waveform.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PixelWaveforms {
     /// Index into [`Experiment::pixels`].
     pub pixel: usize,
-    /// One or more waveforms (a sine played several times is one per play); `[Waveform::Null]` for suppression.
-    pub waveforms: Vec<Waveform>,
+    /// The pixel's target waveform; [`Waveform::Null`] for suppression.
+    pub waveform: Waveform,
     /// True when this pixel carries what the participant must find (see [`Stimulus::target_pixels`]).
     pub target: bool,
 }
@@ -526,7 +533,7 @@ impl Stimulus {
         if unique.is_empty() { active.into_iter().map(|(n, _)| n).collect() } else { unique }
     }
 
-    /// Control's waveforms at every pixel of `experiment` for one presentation (all `plays`), with noise drawn
+    /// Control's waveform at every pixel of `experiment` for one presentation (all `plays`), with noise drawn
     /// from `seed`. Pixels the stimulus does not name are null targets.
     ///
     /// # Errors
@@ -536,25 +543,25 @@ impl Stimulus {
         let period_s = self.play_s() + self.play_pause_s;
         let targets = self.target_pixels();
         let mut out: Vec<PixelWaveforms> = (0..experiment.pixels.len())
-            .map(|pixel| PixelWaveforms { pixel, waveforms: vec![Waveform::Null], target: false })
+            .map(|pixel| PixelWaveforms { pixel, waveform: Waveform::Null, target: false })
             .collect();
-        let mut place = |name: &str, waveforms: Vec<Waveform>| -> Result<(), ExperimentError> {
+        let mut place = |name: &str, waveform: Waveform| -> Result<(), ExperimentError> {
             let pixel = experiment.pixel_index(name).ok_or_else(|| ExperimentError::Stimulus {
                 stimulus: self.id.clone(),
                 reason: format!("no pixel `{name}` in experiment `{}`", experiment.name),
             })?;
-            out[pixel] = PixelWaveforms { pixel, waveforms, target: targets.contains(&name) };
+            out[pixel] = PixelWaveforms { pixel, waveform, target: targets.contains(&name) };
             Ok(())
         };
         for (k, (name, pattern)) in self.pixels.iter().enumerate() {
             // Each pixel its own noise: bursts at different pixels are independent draws.
-            place(name, pattern.waveforms(0.0, self.plays, period_s, seed.wrapping_add(k as u64)))?;
+            place(name, pattern.waveform(0.0, self.plays, period_s, seed.wrapping_add(k as u64)))?;
         }
         if let Some(seq) = &self.sequence {
             for (j, name) in seq.pixels.iter().enumerate() {
                 let offset_s = j as f64 * seq.delay_s;
                 let seed = seed.wrapping_add((self.pixels.len() + j) as u64);
-                place(name, seq.pattern.waveforms(offset_s, self.plays, period_s, seed))?;
+                place(name, seq.pattern.waveform(offset_s, self.plays, period_s, seed))?;
             }
         }
         Ok(out)
@@ -677,13 +684,19 @@ seed = 1
         assert!((s.play_s() - 0.13).abs() < 1e-12);
         assert!((s.duration_s() - (2.0 * 0.13 + 0.5)).abs() < 1e-12);
         let w = s.waveforms(&e, 9).unwrap();
-        match &w[1].waveforms[..] {
-            [Waveform::NoiseBursts { starts_s, duration_s, .. }] => {
+        match &w[1].waveform {
+            Waveform::NoiseBursts { starts_s, duration_s, .. } => {
                 assert_eq!(*duration_s, 0.05);
                 assert!((starts_s[0] - 0.08).abs() < 1e-12 && (starts_s[1] - (0.08 + 0.63)).abs() < 1e-12);
             }
             other => panic!("{other:?}"),
         }
+        let (_, key, message) = invalid(&seq.replace(
+            "pattern = { kind = \"noise-bursts\", burst_s = 0.05, pause_s = 0.0, count = 1 }",
+            "pattern = { kind = \"sine\", freq_hz = 90.0, duration_s = 0.05 }",
+        ));
+        assert_eq!(key, "stimuli[1].plays");
+        assert!(message.contains("plays once"), "{message}");
         let (_, key, message) = invalid(&seq.replace("burst_s = 0.05", "burst_s = 0.1"));
         assert_eq!(key, "stimuli[1].sequence.pattern");
         assert!(message.contains("overlap"), "{message}");

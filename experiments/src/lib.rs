@@ -10,7 +10,7 @@
 //! - [`stats`]: Wilson 95 % intervals, exact binomial p values against chance, confusion matrices.
 //!
 //! This crate knows no rig: rendering drives from a stimulus ([`file::Stimulus::waveforms`] gives control's
-//! `Waveform`s per pixel), playing them and reading responses are the runner's.
+//! `Waveform` per pixel), playing them and reading responses are the runner's.
 //!
 //! # The experiment file
 //! TOML; SI units, the unit in each key's name (times in seconds, frequencies in hertz, positions in metres in the
@@ -40,7 +40,8 @@
 //! - `{ kind = "null" }`: suppression.
 //!
 //! These map onto `metaplate_control::target::Waveform` (`NoiseBursts`, `WaveletTrain` with `cycles = wavelet_s *
-//! freq_hz` centred on each wavelet, `Sine`, `Null`); synthesis is control's.
+//! freq_hz` centred on each wavelet, `Sine`, `Null`), one per pixel; synthesis is control's. A stimulus with a sine
+//! plays once (`plays = 1`): control's sine is one span.
 //!
 //! # The built-ins: where the pixels are, and two choices the paper leaves open
 //! The five pixels are the fingertips of a right hand, palm down, 3.2 cm apart (the paper's interdigit spacing) in
