@@ -11,6 +11,7 @@ mod check;
 mod deconvolve;
 mod demo;
 mod devices;
+mod experiment;
 mod export;
 mod focus;
 mod import;
@@ -64,6 +65,9 @@ enum Command {
     /// Play focused targets on the rig (mock lab or hardware) through the calibration: the onset measured on the
     /// loopback, the predicted peak velocity at each pixel; refuses drives that would clip and unfocusable pixels.
     Play(play::PlayArgs),
+    /// The paper's behavioural experiments: list the built-ins; report session directories (accuracy, Wilson 95 %,
+    /// exact binomial p against chance, confusion matrices; JSON, Parquet, figures).
+    Experiment(experiment::ExperimentArgs),
     /// Export a dataset as a universal file (UFF 58 or 58b, with 164 units and 2411 nodes) for modal-analysis
     /// tools, streamed with a progress bar.
     Export(export::ExportArgs),
@@ -136,6 +140,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Deconvolve(args) => deconvolve::run(&args),
         Command::Focus(args) => focus::run(&args),
         Command::Play(args) => play::run(&args),
+        Command::Experiment(args) => experiment::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Import(args) => import::run(&args),
         Command::Sweep(args) => sweep::run(&args),

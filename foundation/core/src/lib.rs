@@ -12,4 +12,5 @@ pub mod hash;
 pub mod rig;
 pub mod rng;
 pub mod scene;
+pub mod toml_locate;
 pub mod vibrometer;

@@ -145,6 +145,19 @@ pub(crate) fn write_file_into(
     Ok(written)
 }
 
+/// Writes `dir/name` durably with `bytes` (temporary name, fsync, rename, directory fsync): a small file outside a
+/// dataset (an experiment session's plan) that must appear complete or not at all.
+///
+/// # Errors
+/// [`StoreError::Io`] / [`StoreError::DiskFull`] naming the step that failed.
+pub fn write_bytes(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), StoreError> {
+    let path = dir.join(name);
+    write_file(dir, name, &WriteBudget::default(), |sink| {
+        sink.write_all(bytes).map_err(StoreError::io("write", &path))
+    })?;
+    Ok(())
+}
+
 fn write_temp_then_rename(
     temp: &Path,
     target: &Path,
@@ -175,7 +188,7 @@ fn write_temp_then_rename(
 ///
 /// # Errors
 /// [`StoreError::Io`] if the directory cannot be opened or synced.
-pub(crate) fn sync_dir(dir: &Path) -> Result<(), StoreError> {
+pub fn sync_dir(dir: &Path) -> Result<(), StoreError> {
     #[cfg(unix)]
     {
         File::open(dir).and_then(|d| d.sync_all()).map_err(StoreError::io("fsync directory", dir))?;
@@ -216,6 +229,16 @@ mod tests {
         assert_eq!(written, Written { size_bytes: 5, checksum: crate::checksum::sha256(b"hello") });
         let names: Vec<_> = fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names, ["a.bin"]);
+    }
+
+    #[test]
+    fn write_bytes_writes_a_whole_file_and_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        write_bytes(dir.path(), "plan.json", b"{}").unwrap();
+        write_bytes(dir.path(), "plan.json", b"{\"a\": 1}").unwrap();
+        assert_eq!(fs::read(dir.path().join("plan.json")).unwrap(), b"{\"a\": 1}");
+        assert_eq!(entry_names(dir.path()).unwrap(), ["plan.json"]);
+        assert!(write_bytes(&dir.path().join("missing"), "x", b"").is_err());
     }
 
     #[test]

@@ -38,6 +38,7 @@ mod writer;
 
 pub use checksum::sha256;
 pub use compact::{CompactReport, compact};
+pub use durable::{sync_dir, write_bytes};
 pub use error::StoreError;
 pub use journal::{JOURNAL_FILE, JournalCommit, JournalIssue, JournalView};
 pub use manifest::{

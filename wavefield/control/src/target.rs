@@ -44,6 +44,16 @@ pub enum Waveform {
         /// RNG seed.
         seed: u64,
     },
+    /// White-noise bursts of `duration_s` starting at each of `starts_s` (a burst train: the paper's experiments 1
+    /// and 3), drawn in order from one seeded generator, band-limited.
+    NoiseBursts {
+        /// Burst starts, s.
+        starts_s: Vec<f64>,
+        /// Length of each burst, s.
+        duration_s: f64,
+        /// RNG seed.
+        seed: u64,
+    },
     /// A sinusoid of `freq_hz` from `start_s` for `duration_s` (the whole period when `duration_s` is 0).
     Sine {
         /// Frequency, Hz.
@@ -174,6 +184,19 @@ impl Waveform {
                 let mut rng = SplitMix64::new(*seed, NOISE_STREAM);
                 for i in span(*start_s, *duration_s) {
                     x[i] = rng.uniform() * 2.0 - 1.0;
+                }
+            }
+            Self::NoiseBursts { starts_s, duration_s, seed } => {
+                if starts_s.is_empty() {
+                    return Err(ControlError::Empty { input: "noise burst starts" });
+                }
+                positive("duration_s", *duration_s)?;
+                let mut rng = SplitMix64::new(*seed, NOISE_STREAM);
+                for &start_s in starts_s {
+                    check_time("starts_s", start_s)?;
+                    for i in span(start_s, *duration_s) {
+                        x[i] = rng.uniform() * 2.0 - 1.0;
+                    }
                 }
             }
             Self::Sine { freq_hz, start_s, duration_s } => {
@@ -334,5 +357,29 @@ impl FromStr for Waveform {
                 "unknown target `{other}` (expected impulse, impulses, noise, sine, wavelets or null)"
             ))),
         }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_noise_burst_is_the_noise_waveform_and_a_train_places_each_burst() {
+        let (len, fs) = (2400, 24_000.0);
+        let single = Waveform::Noise { start_s: 0.01, duration_s: 0.005, seed: 3 }.samples(len, fs).unwrap();
+        let train = Waveform::NoiseBursts { starts_s: vec![0.01], duration_s: 0.005, seed: 3 };
+        assert_eq!(train.samples(len, fs).unwrap(), single);
+        let two = Waveform::NoiseBursts { starts_s: vec![0.01, 0.05], duration_s: 0.005, seed: 3 };
+        let x = two.samples(len, fs).unwrap();
+        let nonzero: Vec<usize> = (0..len).filter(|&i| x[i] != 0.0).collect();
+        assert_eq!(nonzero.first(), Some(&240));
+        assert!(nonzero.iter().all(|&i| (240..360).contains(&i) || (1200..1320).contains(&i)));
+        assert!(nonzero.iter().any(|&i| i >= 1200));
+        let empty = Waveform::NoiseBursts { starts_s: vec![], duration_s: 0.005, seed: 3 };
+        assert!(empty.samples(len, fs).is_err());
+        let outside = Waveform::NoiseBursts { starts_s: vec![0.2], duration_s: 0.005, seed: 3 };
+        assert!(outside.samples(len, fs).is_err());
     }
 }

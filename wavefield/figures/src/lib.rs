@@ -1,6 +1,6 @@
 //! Figures of the paper's analyses, each written as PNG and SVG: wavelength against frequency, focus snapshots (and
 //! the focusing as an animated PNG), the virtual-pixel-area map, POD energy, singular-value energy and condition
-//! numbers (plus the driven response).
+//! numbers (plus the driven response); behavioural accuracy per participant with the chance line.
 //!
 //! Text is set in DejaVu Sans, bundled in the crate (`fonts/`, Bitstream Vera licence) and read by ab_glyph: no
 //! system font, fontconfig or font-kit is ever consulted, so figures look the same on every machine and in CI.
@@ -9,6 +9,7 @@
 //! `<name>.svg` into a directory, returning both paths. The grid maps for pages (`status_map_svg`, `snr_map_svg`)
 //! return inline SVG instead.
 
+mod accuracy;
 mod colour;
 mod field;
 mod glyphs;
@@ -18,6 +19,7 @@ mod plots;
 mod render;
 mod tradeoff;
 
+pub use accuracy::{AccuracyBar, accuracy};
 pub use grid_svg::{CellStatus, snr_map_svg, status_map_svg};
 pub use maps::{PlateOverlay, focus_animation, focus_snapshots, pixel_area_map};
 pub use plots::{

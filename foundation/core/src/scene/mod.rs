@@ -22,7 +22,6 @@ mod error;
 mod fault;
 mod file;
 mod instruments;
-mod locate;
 mod outline;
 mod plate;
 mod resonator;
@@ -46,8 +45,8 @@ pub use setup::SetupSpec;
 pub use support::SupportSpec;
 
 use crate::grid::GridSpec;
+use crate::toml_locate::DocIndex;
 use file::SceneFile;
-use locate::DocIndex;
 use validate::Problem;
 
 /// Prefix of the hash in a [`SceneId`] that [`Scene::id`] makes: the hash algorithm's name.
@@ -133,8 +132,12 @@ impl Scene {
     /// [`SceneError::Syntax`] (not TOML), [`SceneError::Schema`] (unknown key, missing key, wrong type, unknown
     /// fault kind...) or [`SceneError::Invalid`] (a value outside its valid range), each with the line and key path.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
-        let doc = DocIndex::parse(text, origin)?;
-        let file: SceneFile = toml::from_str(text).map_err(|e| doc.schema_error(&e))?;
+        let doc = DocIndex::parse(text, origin)
+            .map_err(|l| SceneError::Syntax { location: l.location, message: l.message })?;
+        let file: SceneFile = toml::from_str(text).map_err(|e| {
+            let l = doc.schema_error(&e);
+            SceneError::Schema { location: l.location, key_path: l.key_path, message: l.message }
+        })?;
         let at = |p: Problem| SceneError::Invalid {
             location: doc.location_of_path(&p.key_path),
             key_path: p.key_path,

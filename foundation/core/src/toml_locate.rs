@@ -1,15 +1,29 @@
-//! Where in a scene file an error is: byte offsets to key paths and lines, and hints for unit mistakes.
+//! Where in a TOML file an error is: byte offsets to key paths and lines, and hints for unit mistakes.
+//!
+//! The one home of located TOML errors: scene files ([`crate::scene`]) and experiment files (`metaplate-experiment`)
+//! both index their text with [`DocIndex`] and report `origin:line:column`, the dotted key path and the reason.
 
 use std::ops::Range;
 
 use toml::de::{DeTable, DeValue};
 
-use super::error::SceneError;
+/// A located problem in a TOML document: where, which key, what.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Located {
+    /// `origin:line:column` (1-based), or just the origin when the key is not spelt out in the text.
+    pub location: String,
+    /// Dotted path of the offending key (`plate.thickness_m`, `actuators[2].x_m`), empty at the top level or for a
+    /// syntax error.
+    pub key_path: String,
+    /// What was wrong, with a hint where one is likely (a unit in a key's name).
+    pub message: String,
+}
 
-/// Nesting beyond any scene's (a scene is at most 4 deep); deeper hostile input is not indexed, to bound recursion.
+/// Nesting beyond any file's we read (a scene is at most 4 deep); deeper hostile input is not indexed, to bound
+/// recursion.
 const MAX_DEPTH: usize = 16;
 
-/// SI unit suffixes of scene keys, longest first, with how a message names them.
+/// SI unit suffixes of keys, longest first, with how a message names them.
 const SI_UNITS: &[(&str, &str)] = &[
     ("volts_per_m_s", "V per m/s"),
     ("kg_m3", "kg/m^3"),
@@ -26,7 +40,7 @@ const SI_UNITS: &[(&str, &str)] = &[
 ];
 
 /// Every key and array element of a parsed document, with its dotted path and spans.
-pub(crate) struct DocIndex<'a> {
+pub struct DocIndex<'a> {
     text: &'a str,
     origin: &'a str,
     entries: Vec<Entry>,
@@ -42,16 +56,17 @@ impl<'a> DocIndex<'a> {
     /// Parses `text` (from `origin`, a file path or a built-in's name) and indexes it.
     ///
     /// # Errors
-    /// [`SceneError::Syntax`] when `text` is not TOML.
-    pub(crate) fn parse(text: &'a str, origin: &'a str) -> Result<Self, SceneError> {
+    /// A [`Located`] syntax error (empty key path) when `text` is not TOML.
+    pub fn parse(text: &'a str, origin: &'a str) -> Result<Self, Located> {
         let mut index = Self { text, origin, entries: Vec::new() };
         match DeTable::parse(text) {
             Ok(doc) => {
                 index.walk(doc.get_ref(), "", 0);
                 Ok(index)
             }
-            Err(e) => Err(SceneError::Syntax {
+            Err(e) => Err(Located {
                 location: index.location(e.span().map_or(0, |s| s.start)),
+                key_path: String::new(),
                 message: e.message().to_owned(),
             }),
         }
@@ -84,7 +99,7 @@ impl<'a> DocIndex<'a> {
     }
 
     /// `origin:line:column` (1-based) of byte `offset`.
-    pub(crate) fn location(&self, offset: usize) -> String {
+    pub fn location(&self, offset: usize) -> String {
         let offset = floor_char_boundary(self.text, offset);
         let before = &self.text[..offset];
         let line = before.matches('\n').count() + 1;
@@ -107,7 +122,7 @@ impl<'a> DocIndex<'a> {
 
     /// The location of `path` in the file, or of its nearest enclosing key that the file spells out (a value may
     /// come from a default), or just the origin.
-    pub(crate) fn location_of_path(&self, path: &str) -> String {
+    pub fn location_of_path(&self, path: &str) -> String {
         let mut prefix = path;
         loop {
             if let Some(e) = self.entries.iter().find(|e| e.path == prefix) {
@@ -120,13 +135,19 @@ impl<'a> DocIndex<'a> {
         }
     }
 
-    /// Turns a deserialisation error into a [`SceneError::Schema`] naming the key path, with a hint when the
-    /// mistake looks like a unit in a key's name.
-    pub(crate) fn schema_error(&self, e: &toml::de::Error) -> SceneError {
+    /// Turns a deserialisation error into a [`Located`] problem naming the key path, with a hint when the mistake
+    /// looks like a unit in a key's name.
+    pub fn schema_error(&self, e: &toml::de::Error) -> Located {
         let offset = e.span().map_or(0, |s| s.start);
         let key_path = self.path_at(offset).to_owned();
         let message = explain(e.message(), &key_path);
-        SceneError::Schema { location: self.location(offset), key_path, message }
+        Located { location: self.location(offset), key_path, message }
+    }
+
+    /// A problem found after parsing (a value outside its range) at `key_path`, located by
+    /// [`DocIndex::location_of_path`].
+    pub fn invalid(&self, key_path: String, message: String) -> Located {
+        Located { location: self.location_of_path(&key_path), key_path, message }
     }
 }
 
@@ -138,7 +159,7 @@ fn floor_char_boundary(text: &str, offset: usize) -> usize {
     i
 }
 
-/// Rewords serde's message in the scene's terms ("key", not "field") and adds a unit hint where one fits.
+/// Rewords serde's message in a file's terms ("key", not "field") and adds a unit hint where one fits.
 fn explain(message: &str, key_path: &str) -> String {
     if let Some(rest) = message.strip_prefix("unknown field `") {
         let (key, expected) = rest.split_once('`').unwrap_or((rest, ""));

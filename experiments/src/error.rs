@@ -1,0 +1,126 @@
+//! The one error type of experiments.
+
+use std::path::PathBuf;
+
+use metaplate_core::toml_locate::Located;
+
+/// Why an experiment file, plan, session journal, simulated participant or statistic was refused.
+///
+/// File errors name where, as scene errors do: the file (or built-in) with line and column, the dotted key path and
+/// the reason.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ExperimentError {
+    /// Neither a built-in experiment of that name nor a readable file at that path.
+    #[error("no built-in experiment `{name}` (the built-ins are: {known}), and no file at that path")]
+    NotFound {
+        /// The name or path asked for.
+        name: String,
+        /// The built-in names, comma-separated.
+        known: String,
+    },
+    /// A file could not be read or written.
+    #[error("{action} {path}: {reason}")]
+    Io {
+        /// What was being done (`read`, `append to`, `fsync`).
+        action: &'static str,
+        /// The file.
+        path: PathBuf,
+        /// The operating system's reason.
+        reason: String,
+    },
+    /// The experiment file is not TOML.
+    #[error("{location}: not valid TOML: {message}")]
+    Syntax {
+        /// `origin:line:column`.
+        location: String,
+        /// What the TOML parser expected.
+        message: String,
+    },
+    /// The file does not have an experiment's shape (unknown key, missing key, wrong type) or a value is outside its
+    /// valid range.
+    #[error("{location}: {key_path}: {message}")]
+    Invalid {
+        /// `origin:line:column` when the key is in the file, else the origin.
+        location: String,
+        /// Dotted path of the offending key (`stimuli[2].pixels.thumb.burst_s`).
+        key_path: String,
+        /// What was wrong and what is accepted.
+        message: String,
+    },
+    /// The session directory's stored plan or experiment file differs from the one given (resume refused).
+    #[error(
+        "the session in {dir} was started with {what} {stored}, not {given}: resume with the same experiment file \
+         and seed, or force it"
+    )]
+    SessionMismatch {
+        /// The session directory.
+        dir: PathBuf,
+        /// `plan hash` or `experiment file hash`.
+        what: &'static str,
+        /// The stored hash.
+        stored: String,
+        /// The hash given now.
+        given: String,
+    },
+    /// A session file is corrupt somewhere other than a torn last line.
+    #[error("{path}: line {line}: {reason}")]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What could not be read.
+        reason: String,
+    },
+    /// A journal entry names a trial the plan does not have, or is otherwise inconsistent with it.
+    #[error("journal entry refused: {reason}")]
+    BadEntry {
+        /// Why.
+        reason: String,
+    },
+    /// An argument outside its valid range (a statistic of no trials, a chance level of 1, an unknown option).
+    #[error("invalid {name}: {reason}")]
+    InvalidArgument {
+        /// Argument name, with its unit where it has one.
+        name: &'static str,
+        /// What was wrong and what is accepted.
+        reason: String,
+    },
+    /// The store's durable write failed (its message names the file and the step).
+    #[error("{reason}")]
+    Store {
+        /// The store's message.
+        reason: String,
+    },
+    /// A stimulus could not be turned into control's waveforms.
+    #[error("stimulus `{stimulus}`: {reason}")]
+    Stimulus {
+        /// The stimulus id.
+        stimulus: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+impl ExperimentError {
+    pub(crate) fn io(action: &'static str, path: &std::path::Path) -> impl FnOnce(std::io::Error) -> Self + use<> {
+        let path = path.to_path_buf();
+        move |e| Self::Io { action, path, reason: e.to_string() }
+    }
+
+    pub(crate) fn invalid_argument(name: &'static str, reason: impl Into<String>) -> Self {
+        Self::InvalidArgument { name, reason: reason.into() }
+    }
+}
+
+impl From<Located> for ExperimentError {
+    fn from(l: Located) -> Self {
+        Self::Invalid { location: l.location, key_path: l.key_path, message: l.message }
+    }
+}
+
+impl From<metaplate_store::StoreError> for ExperimentError {
+    fn from(e: metaplate_store::StoreError) -> Self {
+        Self::Store { reason: e.to_string() }
+    }
+}
