@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_core::rig::{Rig, Wiring};
+use metaplate_lab::MockLab;
 use metaplate_recipes::Calibration;
 use metaplate_recipes::drive::DRIVE_PEAK_FS;
 use metaplate_recipes::play::{PatternPlayback, Played};
@@ -151,7 +152,7 @@ impl Pattern {
             .pixels
             .iter()
             .map(|p| {
-                json!({"x_m": p.spec.x_m, "y_m": p.spec.y_m, "target": p.spec.target, "point_index": p.point_index,
+                json!({"x_m": p.spec.x_m, "y_m": p.spec.y_m, "target": p.spec.label, "point_index": p.point_index,
                     "predicted_peak_mm_s": p.predicted_peak_mm_s})
             })
             .collect();
@@ -170,10 +171,18 @@ impl Pattern {
     }
 }
 
-/// Runs `metaplate play`.
-pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
-    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
-    let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<anyhow::Result<_>>()?;
+/// The rig `source` names (the mock lab of `--scene`, seeded with `seed`, its Green's functions cached in
+/// `cache_dir`; or the instruments of `--hardware`), checked to be the plate `dataset` was measured on. Keep the
+/// lab, if any, alive while the rig is used.
+///
+/// # Errors
+/// Neither source given; the rig's errors; a rig of another plate (the drives would focus nowhere).
+pub fn rig_for(
+    dataset: &Dataset,
+    source: &Source,
+    seed: Option<u64>,
+    cache_dir: Option<PathBuf>,
+) -> anyhow::Result<(Plate, Rig, Option<MockLab>)> {
     let measured_on = dataset.manifest().meta.scene.clone();
     let same_plate = |plate: &Plate| {
         if measured_on == plate.id {
@@ -185,21 +194,28 @@ pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
             plate.id.name
         ))
     };
-    let (plate, mut rig, _lab) = match (&args.source.scene, &args.source.hardware) {
+    match (&source.scene, &source.hardware) {
         (_, Some(file)) => {
             let (plate, rig) = rig::hardware_rig(file)?;
             same_plate(&plate)?;
-            (plate, rig, None)
+            Ok((plate, rig, None))
         }
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
             same_plate(&plate)?;
             // Only the magnets are prepared: nothing is measured at the pixels (the beam rests where it is).
-            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), args.seed, args.cache.dir())?;
-            (plate, rig, Some(lab))
+            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), seed, cache_dir)?;
+            Ok((plate, rig, Some(lab)))
         }
         (None, None) => bail!("give --scene or --hardware"),
-    };
+    }
+}
+
+/// Runs `metaplate play`.
+pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
+    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
+    let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<anyhow::Result<_>>()?;
+    let (plate, mut rig, _lab) = rig_for(&dataset, &args.source, args.seed, args.cache.dir())?;
     let pattern = prepare(&dataset, &specs, &args.calibration, &args.render, &rig.wiring, args.level)?;
     let played = pattern.play(&mut rig)?;
     if args.json {
@@ -223,7 +239,7 @@ pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
     for p in &pattern.pixels {
         println!(
             "pixel ({}, {}) {}: point {}, predicted peak {:.3} mm/s",
-            p.spec.x_m, p.spec.y_m, p.spec.target, p.point_index, p.predicted_peak_mm_s
+            p.spec.x_m, p.spec.y_m, p.spec.label, p.point_index, p.predicted_peak_mm_s
         );
     }
     Ok(())
