@@ -15,7 +15,7 @@ use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-use common::{cache_dir, metaplate};
+use common::cache_dir;
 use metaplate_experiment::journal::JOURNAL_FILE;
 use metaplate_experiment::{Entry, SessionRecord};
 use serde_json::Value;
@@ -39,35 +39,30 @@ fn experiment_file(repeats: u32, repeat_pause_s: f64) -> String {
 }
 
 /// The calibration, the scan through it and the experiment file (4 repeats: 15 trials), made once for every test
-/// of this file: (calibration, scan, experiment file, the directory they are in).
+/// process of this binary build (the tests run in processes of their own under nextest): built beside, then renamed
+/// into a directory named after the binary's build, so that concurrent processes share one and a rebuilt binary
+/// makes its own. Returns (calibration, scan, experiment file, this process's scratch directory).
 fn fixtures() -> &'static (PathBuf, PathBuf, PathBuf, PathBuf) {
     static FIXTURES: OnceLock<(PathBuf, PathBuf, PathBuf, PathBuf)> = OnceLock::new();
     FIXTURES.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("metaplate-experiment-run-test-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let (cal, scan) = (dir.join("cal"), dir.join("scan"));
-        let out = metaplate(&["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let out = metaplate(&[
-            "scan",
-            "--scene",
-            "metamaterial",
-            "--protocol",
-            "quick",
-            "--grid",
-            "3x2",
-            "--seed",
-            "5",
-            "--calibration",
-            cal.to_str().unwrap(),
-            "--out",
-            scan.to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let file = dir.join("three-points.toml");
-        std::fs::write(&file, experiment_file(4, 0.5)).unwrap();
-        (cal, scan, file, dir)
+        let scratch = std::env::temp_dir().join(format!("metaplate-experiment-run-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&scratch);
+        std::fs::create_dir_all(&scratch).unwrap();
+        let binary = std::fs::metadata(env!("CARGO_BIN_EXE_metaplate")).unwrap();
+        let built_ns = binary.modified().unwrap().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
+        let shared = Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("experiment-run-fixtures-{built_ns:x}-{:x}", binary.len()));
+        if !shared.exists() {
+            let building = scratch.join("fixtures");
+            std::fs::create_dir_all(&building).unwrap();
+            common::calibration_and_scan_3x2(&building);
+            std::fs::write(building.join("three-points.toml"), experiment_file(4, 0.5)).unwrap();
+            // Another process may have won the race: its fixtures are the same (seeded), use them.
+            if std::fs::rename(&building, &shared).is_err() {
+                assert!(shared.exists(), "cannot move the fixtures to {}", shared.display());
+            }
+        }
+        (shared.join("cal"), shared.join("scan"), shared.join("three-points.toml"), scratch)
     })
 }
 

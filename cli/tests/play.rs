@@ -22,26 +22,7 @@ fn datasets() -> &'static (PathBuf, PathBuf) {
         let dir = std::env::temp_dir().join(format!("metaplate-play-test-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let (cal, scan) = (dir.join("cal"), dir.join("scan"));
-        let out = metaplate(&["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let out = metaplate(&[
-            "scan",
-            "--scene",
-            "metamaterial",
-            "--protocol",
-            "quick",
-            "--grid",
-            "3x2",
-            "--seed",
-            "5",
-            "--calibration",
-            cal.to_str().unwrap(),
-            "--out",
-            scan.to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        (cal, scan)
+        common::calibration_and_scan_3x2(&dir)
     })
 }
 
