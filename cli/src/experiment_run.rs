@@ -23,7 +23,9 @@
 //!   An `until-response` experiment replays the stimulus every `repeat_pause_s` until an entry. End of input stops
 //!   the session (resumable).
 //!
-//! Not done here: the masking noise (a warning says so) and the HID keypad.
+//! A hardware file's keypad answers too: a key press is that key's entry (letters and digits).
+//!
+//! Not done here: the masking noise (a warning says so).
 
 use std::collections::BTreeMap;
 use std::io::BufRead;
@@ -41,6 +43,7 @@ use metaplate_experiment::{
     Entry, Experiment, FieldAtPixels, Plan, PlannedTrial, Session, SessionRecord, SimParticipant, Stimulus,
     TrialRecord, builtin,
 };
+use metaplate_keypad::{HidInput, KeyAction, Keypad};
 use metaplate_recipes::drive::DRIVE_PEAK_FS;
 use metaplate_store::Dataset;
 use serde_json::json;
@@ -54,6 +57,8 @@ const REPEAT_KEY: &str = "r";
 const UNDO_KEY: &str = "u";
 const VOID_KEY: &str = "v";
 const PAUSE_KEY: &str = "p";
+/// How long the keypad's thread waits for a report before looking again, s.
+const KEYPAD_POLL_S: f64 = 0.2;
 
 /// Arguments of `metaplate experiment run`.
 #[derive(Args)]
@@ -155,7 +160,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             stored.header.participant
         );
     }
-    let (_plate, mut rig, _lab) = play::rig_for(&dataset, &args.source, None, args.cache.dir())?;
+    let play::OpenedSource { mut rig, lab: _lab, keypad, .. } =
+        play::rig_for(&dataset, &args.source, None, args.cache.dir())?;
     // Every stimulus rendered once, before the session is started or resumed: a refusal comes now, with nothing
     // written.
     let mut prepared: BTreeMap<String, Prepared> = BTreeMap::new();
@@ -173,7 +179,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 
     let mut responder = match sim {
         Some(s) => Responder::Sim(s),
-        None => Responder::Console(stdin_lines()),
+        None => Responder::Console(console_input(keypad)),
     };
     let mut answered = answered_stack(&SessionRecord::read(&args.out)?.entries);
     let total = session.header().plan.trials.len();
@@ -387,9 +393,34 @@ fn answered_stack(entries: &[Entry]) -> Vec<u32> {
     stack
 }
 
-/// Standard input's lines, read on a thread (so that a stimulus can repeat while the console waits).
-fn stdin_lines() -> Receiver<String> {
+/// The console's entries: standard input's lines, and the keypad's key presses (one character each), read on
+/// threads (so that a stimulus can repeat while the console waits).
+fn console_input(keypad: Option<Keypad<Box<dyn HidInput>>>) -> Receiver<String> {
     let (tx, rx) = std::sync::mpsc::channel();
+    if let Some(mut keypad) = keypad {
+        eprintln!("the keypad answers too: its keys are the console's");
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            loop {
+                match keypad.next_event(KEYPAD_POLL_S) {
+                    Ok(Some(event)) if event.action == KeyAction::Down => {
+                        if let Some(c) = event.key.character()
+                            && tx.send(c.to_string()).is_err()
+                        {
+                            break;
+                        }
+                    }
+                    Ok(_) => {}
+                    Err(e) if e.suggests_reopen() => {
+                        eprintln!("keypad: {e}; reopening");
+                        std::thread::sleep(Duration::from_secs(1));
+                        let _ = keypad.reopen();
+                    }
+                    Err(e) => eprintln!("keypad: {e}"),
+                }
+            }
+        });
+    }
     std::thread::spawn(move || {
         for line in std::io::stdin().lock().lines() {
             let Ok(line) = line else { break };

@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_core::rig::{Rig, Wiring};
+use metaplate_keypad::{HidInput, Keypad};
 use metaplate_lab::MockLab;
 use metaplate_recipes::Calibration;
 use metaplate_recipes::drive::DRIVE_PEAK_FS;
@@ -171,9 +172,21 @@ impl Pattern {
     }
 }
 
+/// What [`rig_for`] opens.
+pub struct OpenedSource {
+    /// The plate.
+    pub plate: Plate,
+    /// The rig.
+    pub rig: Rig,
+    /// The mock lab behind the rig, if it is one: keep it alive while the rig is used.
+    pub lab: Option<MockLab>,
+    /// The response keypad the hardware file names, if any.
+    pub keypad: Option<Keypad<Box<dyn HidInput>>>,
+}
+
 /// The rig `source` names (the mock lab of `--scene`, seeded with `seed`, its Green's functions cached in
-/// `cache_dir`; or the instruments of `--hardware`), checked to be the plate `dataset` was measured on. Keep the
-/// lab, if any, alive while the rig is used.
+/// `cache_dir`; or the instruments of `--hardware`, with its keypad), checked to be the plate `dataset` was measured
+/// on.
 ///
 /// # Errors
 /// Neither source given; the rig's errors; a rig of another plate (the drives would focus nowhere).
@@ -182,7 +195,7 @@ pub fn rig_for(
     source: &Source,
     seed: Option<u64>,
     cache_dir: Option<PathBuf>,
-) -> anyhow::Result<(Plate, Rig, Option<MockLab>)> {
+) -> anyhow::Result<OpenedSource> {
     let measured_on = dataset.manifest().meta.scene.clone();
     let same_plate = |plate: &Plate| {
         if measured_on == plate.id {
@@ -196,16 +209,16 @@ pub fn rig_for(
     };
     match (&source.scene, &source.hardware) {
         (_, Some(file)) => {
-            let (plate, rig) = rig::hardware_rig(file)?;
+            let (plate, opened) = rig::hardware_rig_and_keypad(file)?;
             same_plate(&plate)?;
-            Ok((plate, rig, None))
+            Ok(OpenedSource { plate, rig: opened.rig, lab: None, keypad: opened.keypad })
         }
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
             same_plate(&plate)?;
             // Only the magnets are prepared: nothing is measured at the pixels (the beam rests where it is).
             let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), seed, cache_dir)?;
-            Ok((plate, rig, Some(lab)))
+            Ok(OpenedSource { plate, rig, lab: Some(lab), keypad: None })
         }
         (None, None) => bail!("give --scene or --hardware"),
     }
@@ -215,7 +228,8 @@ pub fn rig_for(
 pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
     let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
     let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<anyhow::Result<_>>()?;
-    let (plate, mut rig, _lab) = rig_for(&dataset, &args.source, args.seed, args.cache.dir())?;
+    let OpenedSource { plate, mut rig, lab: _lab, keypad: _ } =
+        rig_for(&dataset, &args.source, args.seed, args.cache.dir())?;
     let pattern = prepare(&dataset, &specs, &args.calibration, &args.render, &rig.wiring, args.level)?;
     let played = pattern.play(&mut rig)?;
     if args.json {
