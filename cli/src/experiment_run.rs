@@ -9,7 +9,8 @@
 //!
 //! Timing: a stimulus starts one impulse-response length into its drive (the lead the inverse filter needs to build
 //! it) and the drive lasts one more after it (the plate's ring-down): the drive is `2 x IR + stimulus` long. Times
-//! in the journal are on the rig's clock (virtual on the mock lab): `scheduled_onset_s` and `measured_onset_s` are
+//! in the journal are on the rig's clock (virtual on the mock lab, where the console's waits for the experimenter
+//! are added to it): `scheduled_onset_s` and `measured_onset_s` are
 //! the clock at the play's start plus the playback's scheduled and loopback-measured onsets.
 //!
 //! Responses:
@@ -127,11 +128,11 @@ enum Outcome {
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let experiment = builtin::resolve(&args.experiment)?;
     let participant = args.participant.trim();
-    let is_sim = participant == "sim" || participant.starts_with("sim:");
-    let sim = if is_sim { Some(SimParticipant::parse(participant)?) } else { None };
     if participant.is_empty() {
         bail!("--participant must not be empty");
     }
+    let is_sim = participant == "sim" || participant.starts_with("sim:");
+    let sim = if is_sim { Some(SimParticipant::parse(participant)?) } else { None };
     if sim.is_none() {
         for r in &experiment.responses {
             if [REPEAT_KEY, UNDO_KEY, VOID_KEY, PAUSE_KEY].contains(&r.key.as_str()) {
@@ -148,9 +149,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         eprintln!("warning: the experiment's masking noise is not played (not implemented): mask by other means");
     }
     let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
-    let seed = args.seed.unwrap_or(experiment.order.seed);
-    let plan = Plan::new(&experiment, seed);
-    if let Ok(stored) = SessionRecord::read(&args.out)
+    let plan = Plan::new(&experiment, args.seed.unwrap_or(experiment.order.seed));
+    let stored = SessionRecord::read(&args.out).ok();
+    if let Some(stored) = &stored
         && stored.header.participant != participant
         && !args.force
     {
@@ -160,7 +161,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             stored.header.participant
         );
     }
-    let play::OpenedSource { mut rig, lab: _lab, keypad, .. } =
+    // The stimuli's noise is drawn from the plan's seed: a resumed session's (forced, the stored plan's) plays the
+    // drives its first trials played.
+    let seed = stored.as_ref().map_or(plan.seed, |s| s.header.plan.seed);
+    let play::OpenedSource { mut rig, lab, keypad, .. } =
         play::rig_for(&dataset, &args.source, None, args.cache.dir())?;
     // Every stimulus rendered once, before the session is started or resumed: a refusal comes now, with nothing
     // written.
@@ -195,7 +199,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     while let Some(trial) = session.next_trial().cloned() {
         let done = session.progress().results.iter().filter(|r| r.is_some()).count();
         let stimulus = prepared.get(&trial.stimulus_id).context("internal: stimulus not prepared")?;
-        let ctx = TrialContext { number: done + 1, total, experiment: &experiment, json: args.json };
+        let ctx = TrialContext {
+            number: done + 1,
+            total,
+            experiment: &experiment,
+            json: args.json,
+            on_mock_lab: lab.is_some(),
+        };
         let outcome = match &mut responder {
             Responder::Sim(sim) => sim_trial(&mut session, &mut rig, &trial, stimulus, sim, &ctx)?,
             Responder::Console(lines) => {
@@ -321,6 +331,9 @@ struct TrialContext<'a> {
     total: usize,
     experiment: &'a Experiment,
     json: bool,
+    /// The rig's clock is the mock lab's virtual clock: the console's waits are added to it, so that a rehearsal's
+    /// trial times are the experimenter's.
+    on_mock_lab: bool,
 }
 
 /// One play on the rig: (scheduled, measured) onset, s on the rig's clock.
@@ -455,6 +468,7 @@ fn console_trial(
     let until_response = e.presentation == Presentation::UntilResponse;
     let replay_every = Duration::from_secs_f64(e.repeat_pause_s.max(0.0) + stimulus.pattern.playback.duration_s);
     loop {
+        let waiting = std::time::Instant::now();
         let line = if until_response {
             match lines.recv_timeout(replay_every) {
                 Ok(line) => line,
@@ -470,6 +484,9 @@ fn console_trial(
                 Err(_) => return Ok(Outcome::Stopped),
             }
         };
+        if ctx.on_mock_lab {
+            rig.clock.sleep_s(waiting.elapsed().as_secs_f64());
+        }
         let key = line.trim();
         let now_s = rig.clock.now_s();
         if let Some(option) = e.responses.iter().find(|r| r.key == key) {
