@@ -289,7 +289,7 @@ fn render_pattern(dataset: &Dataset, calibration: &Path, wav_path: &Path) -> any
         }) else {
             bail!("the scanned dataset has no points");
         };
-        specs.push(PixelSpec { x_m, y_m, target: target.to_owned() });
+        specs.push(PixelSpec::from_text(x_m, y_m, target)?);
     }
     let rendered = render(dataset, &specs, Some(calibration), &RenderOptions::default())?;
     wav::write_f32(wav_path, dataset.sample_rate_hz(), &rendered.signals)?;
@@ -300,7 +300,7 @@ fn render_pattern(dataset: &Dataset, calibration: &Path, wav_path: &Path) -> any
         .zip(&rendered.points)
         .zip(&fields)
         .map(|((s, p), v)| {
-            json!({"x_m": s.x_m, "y_m": s.y_m, "point_index": p, "target": s.target, "peak_velocity_m_s": peak(v)})
+            json!({"x_m": s.x_m, "y_m": s.y_m, "point_index": p, "target": s.label, "peak_velocity_m_s": peak(v)})
         })
         .collect();
     Ok(json!({

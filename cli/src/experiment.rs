@@ -30,6 +30,9 @@ enum ExperimentCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Run one participant's session on the rig (the mock lab of --scene, or --hardware FILE): the plan stored
+    /// before the first trial, every trial journalled as it ends, resumed after a crash at the next trial.
+    Run(Box<crate::experiment_run::RunArgs>),
     /// Report session directories of one experiment: per participant and condition, accuracy with a Wilson 95 %
     /// interval, the exact one-sided binomial p against chance, the confusion matrix, trial times where recorded;
     /// pooled over participants.
@@ -53,6 +56,7 @@ enum ExperimentCommand {
 pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     match &args.command {
         ExperimentCommand::List { json } => list(*json),
+        ExperimentCommand::Run(args) => crate::experiment_run::run(args),
         ExperimentCommand::Report { dirs, json, parquet, figures } => {
             report(dirs, *json, parquet.as_deref(), figures.as_deref())
         }

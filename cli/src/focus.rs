@@ -74,23 +74,23 @@ const ALPHA_RELATIVE: f64 = metaplate_control::solve::DEFAULT_RELATIVE_ALPHA;
 pub struct RenderOptions {
     /// Lower edge of the operating band, Hz.
     #[arg(long, default_value_t = BAND_HZ.0)]
-    band_lo_hz: f64,
+    pub band_lo_hz: f64,
     /// Upper edge of the operating band, Hz.
     #[arg(long, default_value_t = BAND_HZ.1)]
-    band_hi_hz: f64,
+    pub band_hi_hz: f64,
     /// Tikhonov regularisation relative to the largest singular value at each frequency.
     #[arg(long, default_value_t = ALPHA_RELATIVE)]
-    alpha_relative: f64,
+    pub alpha_relative: f64,
     /// Time reversal instead of inverse filtering.
     #[arg(long)]
-    time_reversal: bool,
+    pub time_reversal: bool,
     /// Zero padding of the impulse responses, s (default: their own length, for one-shot playback; 0: one period
     /// for looped playback).
     #[arg(long)]
-    pad_s: Option<f64>,
+    pub pad_s: Option<f64>,
     /// Focus time of plain `impulse` targets, s from the start of the drive (default: half the period).
     #[arg(long)]
-    focus_s: Option<f64>,
+    pub focus_s: Option<f64>,
 }
 
 impl Default for RenderOptions {
@@ -107,15 +107,43 @@ impl Default for RenderOptions {
     }
 }
 
-/// A parsed `--pixel`: position in metres and its waveform text (as `--pixel` takes it after the colon).
+/// What a pixel should do: an impulse at the focus time (decided when rendering), or a given waveform.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TargetSpec {
+    /// A band-limited impulse at the focus time ([`RenderOptions::focus_s`], default half the period).
+    ImpulseAtFocus,
+    /// This waveform (times from the start of the drive).
+    Waveform(Waveform),
+}
+
+/// A pixel to render: position in metres, what it should do, and how to name it in reports.
 #[derive(Debug, Clone)]
 pub struct PixelSpec {
     /// x on the plate, m.
     pub x_m: f64,
     /// y on the plate, m.
     pub y_m: f64,
-    /// The target waveform, `impulse` for an impulse at the focus time.
-    pub target: String,
+    /// The target.
+    pub target: TargetSpec,
+    /// The target as reports print it: `--pixel`'s text after the colon (`impulse` by default), or the name of an
+    /// experiment's pattern.
+    pub label: String,
+}
+
+impl PixelSpec {
+    /// A pixel at (`x_m`, `y_m`) with a target in `--pixel`'s syntax (`impulse` for an impulse at the focus time).
+    ///
+    /// # Errors
+    /// A target control's `Waveform` does not parse.
+    pub fn from_text(x_m: f64, y_m: f64, target: &str) -> anyhow::Result<Self> {
+        let label = target.trim().to_owned();
+        let target = if label == "impulse" {
+            TargetSpec::ImpulseAtFocus
+        } else {
+            TargetSpec::Waveform(label.parse::<Waveform>()?)
+        };
+        Ok(Self { x_m, y_m, target, label })
+    }
 }
 
 pub(crate) fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
@@ -126,7 +154,7 @@ pub(crate) fn parse_pixel(text: &str) -> anyhow::Result<PixelSpec> {
     if !(x_m.is_finite() && y_m.is_finite()) {
         bail!("--pixel `{text}`: coordinates must be finite");
     }
-    Ok(PixelSpec { x_m, y_m, target: target.trim().to_owned() })
+    PixelSpec::from_text(x_m, y_m, target)
 }
 
 /// Reads the calibration dataset in `dir` and returns the filters of `actuators` (the dataset's actuator numbers,
@@ -201,14 +229,13 @@ pub fn render(
         .iter()
         .zip(&points)
         .map(|(spec, &point_index)| {
-            let waveform = if spec.target == "impulse" {
-                Waveform::Impulse { time_s: focus_s }
-            } else {
-                spec.target.parse::<Waveform>()?
+            let waveform = match &spec.target {
+                TargetSpec::ImpulseAtFocus => Waveform::Impulse { time_s: focus_s },
+                TargetSpec::Waveform(w) => w.clone(),
             };
-            Ok(PixelTarget { point_index, waveform, amplitude: 1.0 })
+            PixelTarget { point_index, waveform, amplitude: 1.0 }
         })
-        .collect::<Result<_, metaplate_control::ControlError>>()?;
+        .collect();
     let method = if options.time_reversal { Method::TimeReversal } else { Method::InverseFilter };
     let focus = FocusOptions {
         regularisation: Regularisation::Relative(options.alpha_relative),
@@ -313,7 +340,7 @@ fn write_field(
             .iter()
             .zip(points)
             .zip(at_pixels)
-            .map(|((s, p), v)| json!({"x_m": s.x_m, "y_m": s.y_m, "point_index": p, "target": s.target, "v": v}))
+            .map(|((s, p), v)| json!({"x_m": s.x_m, "y_m": s.y_m, "point_index": p, "target": s.label, "v": v}))
             .collect();
         let mut doc = json!({"sample_rate_hz": fs, "pixels": pixels});
         if let Some(all) = everywhere {

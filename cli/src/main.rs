@@ -12,6 +12,7 @@ mod deconvolve;
 mod demo;
 mod devices;
 mod experiment;
+mod experiment_run;
 mod export;
 mod focus;
 mod import;

@@ -16,6 +16,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_core::rig::{Rig, Wiring};
+use metaplate_keypad::{HidInput, Keypad};
+use metaplate_lab::MockLab;
 use metaplate_recipes::Calibration;
 use metaplate_recipes::drive::DRIVE_PEAK_FS;
 use metaplate_recipes::play::{PatternPlayback, Played};
@@ -151,7 +153,7 @@ impl Pattern {
             .pixels
             .iter()
             .map(|p| {
-                json!({"x_m": p.spec.x_m, "y_m": p.spec.y_m, "target": p.spec.target, "point_index": p.point_index,
+                json!({"x_m": p.spec.x_m, "y_m": p.spec.y_m, "target": p.spec.label, "point_index": p.point_index,
                     "predicted_peak_mm_s": p.predicted_peak_mm_s})
             })
             .collect();
@@ -170,10 +172,30 @@ impl Pattern {
     }
 }
 
-/// Runs `metaplate play`.
-pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
-    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
-    let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<anyhow::Result<_>>()?;
+/// What [`rig_for`] opens.
+pub struct OpenedSource {
+    /// The plate.
+    pub plate: Plate,
+    /// The rig.
+    pub rig: Rig,
+    /// The mock lab behind the rig, if it is one: keep it alive while the rig is used.
+    pub lab: Option<MockLab>,
+    /// The response keypad the hardware file names, if any.
+    pub keypad: Option<Keypad<Box<dyn HidInput>>>,
+}
+
+/// The rig `source` names (the mock lab of `--scene`, seeded with `seed`, its Green's functions cached in
+/// `cache_dir`; or the instruments of `--hardware`, with its keypad), checked to be the plate `dataset` was measured
+/// on.
+///
+/// # Errors
+/// Neither source given; the rig's errors; a rig of another plate (the drives would focus nowhere).
+pub fn rig_for(
+    dataset: &Dataset,
+    source: &Source,
+    seed: Option<u64>,
+    cache_dir: Option<PathBuf>,
+) -> anyhow::Result<OpenedSource> {
     let measured_on = dataset.manifest().meta.scene.clone();
     let same_plate = |plate: &Plate| {
         if measured_on == plate.id {
@@ -185,21 +207,29 @@ pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
             plate.id.name
         ))
     };
-    let (plate, mut rig, _lab) = match (&args.source.scene, &args.source.hardware) {
+    match (&source.scene, &source.hardware) {
         (_, Some(file)) => {
-            let (plate, rig) = rig::hardware_rig(file)?;
+            let (plate, opened) = rig::hardware_rig_and_keypad(file)?;
             same_plate(&plate)?;
-            (plate, rig, None)
+            Ok(OpenedSource { plate, rig: opened.rig, lab: None, keypad: opened.keypad })
         }
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
             same_plate(&plate)?;
             // Only the magnets are prepared: nothing is measured at the pixels (the beam rests where it is).
-            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), args.seed, args.cache.dir())?;
-            (plate, rig, Some(lab))
+            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), seed, cache_dir)?;
+            Ok(OpenedSource { plate, rig, lab: Some(lab), keypad: None })
         }
         (None, None) => bail!("give --scene or --hardware"),
-    };
+    }
+}
+
+/// Runs `metaplate play`.
+pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
+    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
+    let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<anyhow::Result<_>>()?;
+    let OpenedSource { plate, mut rig, lab: _lab, keypad: _ } =
+        rig_for(&dataset, &args.source, args.seed, args.cache.dir())?;
     let pattern = prepare(&dataset, &specs, &args.calibration, &args.render, &rig.wiring, args.level)?;
     let played = pattern.play(&mut rig)?;
     if args.json {
@@ -223,7 +253,7 @@ pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
     for p in &pattern.pixels {
         println!(
             "pixel ({}, {}) {}: point {}, predicted peak {:.3} mm/s",
-            p.spec.x_m, p.spec.y_m, p.spec.target, p.point_index, p.predicted_peak_mm_s
+            p.spec.x_m, p.spec.y_m, p.spec.label, p.point_index, p.predicted_peak_mm_s
         );
     }
     Ok(())

@@ -23,6 +23,33 @@ pub fn metaplate(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// A calibration (`calibrate --seed 5`) and a 3 x 2 quick scan through it (`scan --grid 3x2 --protocol quick
+/// --seed 5`) on the metamaterial scene's mock lab, written into `dir` (as `cal` and `scan`): the small scan the
+/// play and experiment tests render on (points at x -0.08, 0, 0.08 m and y -0.03, 0.03 m). Returns (calibration,
+/// scan).
+pub fn calibration_and_scan_3x2(dir: &Path) -> (PathBuf, PathBuf) {
+    let (cal, scan) = (dir.join("cal"), dir.join("scan"));
+    let out = metaplate(&["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = metaplate(&[
+        "scan",
+        "--scene",
+        "metamaterial",
+        "--protocol",
+        "quick",
+        "--grid",
+        "3x2",
+        "--seed",
+        "5",
+        "--calibration",
+        cal.to_str().unwrap(),
+        "--out",
+        scan.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    (cal, scan)
+}
+
 /// A calibration of the metamaterial mock lab (`calibrate --seed 5`) and a scan through it (`scan --grid 3x2
 /// --protocol quick --seed 5`): (calibration, scan). Made once per build of the binary and shared by every test
 /// process that needs it (play, experiments): the first takes a lock file and builds them in a scratch directory
@@ -45,26 +72,7 @@ pub fn calibrated_scan() -> (PathBuf, PathBuf) {
                 let scratch = root.join(format!("building-{}", std::process::id()));
                 let _ = std::fs::remove_dir_all(&scratch);
                 std::fs::create_dir_all(&scratch).unwrap();
-                let (cal, scan) = paths(&scratch);
-                let out =
-                    metaplate(&["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]);
-                assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-                let out = metaplate(&[
-                    "scan",
-                    "--scene",
-                    "metamaterial",
-                    "--protocol",
-                    "quick",
-                    "--grid",
-                    "3x2",
-                    "--seed",
-                    "5",
-                    "--calibration",
-                    cal.to_str().unwrap(),
-                    "--out",
-                    scan.to_str().unwrap(),
-                ]);
-                assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+                calibration_and_scan_3x2(&scratch);
                 // The scan records the calibration's content hash, not its path: the pair moves together.
                 std::fs::rename(&scratch, &done).unwrap();
                 std::fs::remove_file(&lock).unwrap();

@@ -37,6 +37,19 @@ impl Key {
         self.0
     }
 
+    /// The character the key types unshifted, for the letters (`a` to `z`), the digits of the top row and of the
+    /// numeric keypad (`0` to `9`), and space; `None` for any other key (Enter, arrows, modifiers...).
+    pub fn character(self) -> Option<char> {
+        match self.0 {
+            0x04..=0x1D => Some(char::from(b'a' + (self.0 - 0x04))),
+            0x1E..=0x26 => Some(char::from(b'1' + (self.0 - 0x1E))),
+            0x59..=0x61 => Some(char::from(b'1' + (self.0 - 0x59))),
+            0x27 | 0x62 => Some('0'),
+            0x2C => Some(' '),
+            _ => None,
+        }
+    }
+
     /// Whether it is a modifier (carried in the bitmap byte, not in a slot).
     pub fn is_modifier(self) -> bool {
         self.0 >= FIRST_MODIFIER && self.0 <= FIRST_MODIFIER + 7
@@ -162,6 +175,17 @@ pub fn encode(held: &BTreeSet<Key>) -> [u8; BOOT_REPORT_LEN] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn keys_type_their_characters() {
+        let c = |usage: u8| Key::new(usage).and_then(Key::character);
+        assert_eq!(
+            (c(0x04), c(0x1D), c(0x1E), c(0x26), c(0x27)),
+            (Some('a'), Some('z'), Some('1'), Some('9'), Some('0'))
+        );
+        assert_eq!((c(0x59), c(0x61), c(0x62), c(0x2C)), (Some('1'), Some('9'), Some('0'), Some(' ')));
+        assert_eq!((c(0x28), c(0xE0)), (None, None));
+    }
 
     #[test]
     fn key_codes_below_four_are_not_keys() {

@@ -245,6 +245,29 @@ impl Waveform {
         }
     }
 
+    /// The same waveform `delay_s` later (every time it holds moved by `delay_s`; [`Waveform::Null`] and a
+    /// whole-period sine stay as they are): a pattern placed after the lead its drive needs to build it.
+    pub fn delayed(&self, delay_s: f64) -> Self {
+        let shift = |times: &[f64]| times.iter().map(|t| t + delay_s).collect();
+        match self {
+            Self::Impulse { time_s } => Self::Impulse { time_s: time_s + delay_s },
+            Self::Impulses { times_s } => Self::Impulses { times_s: shift(times_s) },
+            Self::Noise { start_s, duration_s, seed } => {
+                Self::Noise { start_s: start_s + delay_s, duration_s: *duration_s, seed: *seed }
+            }
+            Self::NoiseBursts { starts_s, duration_s, seed } => {
+                Self::NoiseBursts { starts_s: shift(starts_s), duration_s: *duration_s, seed: *seed }
+            }
+            Self::Sine { freq_hz, start_s, duration_s } if *duration_s != 0.0 => {
+                Self::Sine { freq_hz: *freq_hz, start_s: start_s + delay_s, duration_s: *duration_s }
+            }
+            Self::WaveletTrain { freq_hz, cycles, times_s } => {
+                Self::WaveletTrain { freq_hz: *freq_hz, cycles: *cycles, times_s: shift(times_s) }
+            }
+            Self::Sine { .. } | Self::Null => self.clone(),
+        }
+    }
+
     /// True for [`Waveform::Null`].
     pub fn is_null(&self) -> bool {
         matches!(self, Self::Null)
@@ -364,6 +387,24 @@ impl FromStr for Waveform {
 #[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_delayed_waveform_is_the_same_samples_later() {
+        let (len, fs) = (2400, 24_000.0);
+        let delay = 120; // samples
+        for w in [
+            Waveform::NoiseBursts { starts_s: vec![0.01, 0.03], duration_s: 0.005, seed: 3 },
+            Waveform::Sine { freq_hz: 200.0, start_s: 0.01, duration_s: 0.02 },
+            Waveform::WaveletTrain { freq_hz: 300.0, cycles: 2.0, times_s: vec![0.02, 0.05] },
+        ] {
+            let (early, late) = (w.samples(len, fs).unwrap(), w.delayed(delay as f64 / fs).samples(len, fs).unwrap());
+            for i in 0..len - delay {
+                assert!((early[i] - late[i + delay]).abs() < 1e-12, "{w:?} at {i}");
+            }
+        }
+        assert_eq!(Waveform::Impulses { times_s: vec![0.1] }.delayed(0.5), Waveform::Impulses { times_s: vec![0.6] });
+        assert_eq!(Waveform::Null.delayed(0.5), Waveform::Null);
+    }
 
     #[test]
     fn one_noise_burst_is_the_noise_waveform_and_a_train_places_each_burst() {

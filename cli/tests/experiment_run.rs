@@ -1,0 +1,273 @@
+//! `metaplate experiment run` on the metamaterial scene's mock lab, over the calibration and 3 x 2 scan of
+//! tests/play.rs (seed 5; Green's functions cached under the target directory, shared with the other tests).
+//!
+//! The scan's six points are 8 cm apart, too coarse for the built-ins' fingertips 3.2 cm apart (refused: two pixels
+//! would share a point), so the sessions run a small experiment whose pixels are three of the scan's points.
+
+// Helpers outside #[test] functions unwrap too: a failure there is a failed test.
+#![allow(clippy::unwrap_used)]
+
+mod common;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use common::cache_dir;
+use metaplate_experiment::journal::JOURNAL_FILE;
+use metaplate_experiment::{Entry, SessionRecord};
+use serde_json::Value;
+
+/// Three of the scan's points; a train of three bursts at one of them, the others nulled; `repeats` of each.
+fn experiment_file(repeats: u32, repeat_pause_s: f64) -> String {
+    let mut text = format!(
+        "name = \"three-points\"\ndescription = \"which of three measured points plays a burst train\"\n\
+         chance = 0.3333333333333333\npresentation = \"once\"\nrepeat_pause_s = {repeat_pause_s}\n\n\
+         [phases]\nfamiliarisation = true\nrepeats = {repeats}\n\n[order]\nmode = \"full\"\nseed = 7\n"
+    );
+    for (k, (name, x_m)) in [("left", -0.08), ("centre", 0.0), ("right", 0.08)].iter().enumerate() {
+        text.push_str(&format!("\n[[pixels]]\nname = \"{name}\"\nx_m = {x_m}\ny_m = -0.03\n"));
+        text.push_str(&format!("\n[[responses]]\nlabel = \"{name}\"\nkey = \"{}\"\n", k + 1));
+        text.push_str(&format!(
+            "\n[[stimuli]]\nid = \"at-{name}\"\ncorrect = \"{name}\"\n\
+             pixels.{name} = {{ kind = \"noise-bursts\", burst_s = 0.025, pause_s = 0.075, count = 3 }}\n"
+        ));
+    }
+    text
+}
+
+/// The calibration and the scan through it (the fixture every test process shares, [`common::calibrated_scan`]),
+/// the experiment file (4 repeats: 15 trials) and this process's scratch directory, holding that file.
+fn fixtures() -> &'static (PathBuf, PathBuf, PathBuf, PathBuf) {
+    static FIXTURES: OnceLock<(PathBuf, PathBuf, PathBuf, PathBuf)> = OnceLock::new();
+    FIXTURES.get_or_init(|| {
+        let scratch = std::env::temp_dir().join(format!("metaplate-experiment-run-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&scratch);
+        std::fs::create_dir_all(&scratch).unwrap();
+        let (cal, scan) = common::calibrated_scan();
+        let experiment = scratch.join("three-points.toml");
+        std::fs::write(&experiment, experiment_file(4, 0.5)).unwrap();
+        (cal, scan, experiment, scratch)
+    })
+}
+
+/// A fresh path for a session directory (or file) named `name` beside the fixtures.
+fn fresh(name: &str) -> PathBuf {
+    let path = fixtures().3.join(name);
+    let _ = std::fs::remove_dir_all(&path);
+    path
+}
+
+/// The arguments of `metaplate experiment run EXPERIMENT --participant P --out OUT` on the fixtures.
+fn run_args(experiment: &Path, participant: &str, out: &Path) -> Vec<String> {
+    let (cal, scan, ..) = fixtures();
+    [
+        "experiment",
+        "run",
+        experiment.to_str().unwrap(),
+        "--participant",
+        participant,
+        "--data",
+        scan.to_str().unwrap(),
+        "--calibration",
+        cal.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--scene",
+        "metamaterial",
+        "--cache-dir",
+        cache_dir().to_str().unwrap(),
+    ]
+    .iter()
+    .map(|s| (*s).to_owned())
+    .collect()
+}
+
+fn command(args: &[String]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_metaplate"));
+    c.args(args).env("RUST_BACKTRACE", "0");
+    c
+}
+
+/// Runs `args` with `stdin` as its standard input.
+fn run_with_stdin(args: &[String], stdin: &str) -> Output {
+    let mut child = command(args).stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    child.stdin.take().unwrap().write_all(stdin.as_bytes()).unwrap();
+    child.wait_with_output().unwrap()
+}
+
+/// What a trial's result is, times on the clock apart (a resumed session's virtual clock starts again at 0):
+/// (trial, stimulus, drive hash, response, trial time, repeats requested).
+fn results(dir: &Path) -> Vec<(u32, String, String, String, u64, u32)> {
+    let record = SessionRecord::read(dir).unwrap();
+    record
+        .progress
+        .results
+        .iter()
+        .map(|r| {
+            let r = r.as_ref().unwrap();
+            (
+                r.trial,
+                r.stimulus_id.clone(),
+                r.drive_hash.clone(),
+                r.response.clone(),
+                r.trial_time_s.to_bits(),
+                r.repeats_requested,
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_simulated_session_runs_end_to_end_and_the_report_reads_it() {
+    let (.., file, _) = fixtures();
+    let out_dir = fresh("sim-whole");
+    let mut args = run_args(file, "sim:seed=3", &out_dir);
+    args.push("--json".into());
+    let out = command(&args).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("trial 1 of 15") && stderr.contains("trial 15 of 15"), "{stderr}");
+    let events: Vec<Value> =
+        String::from_utf8_lossy(&out.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(events.len(), 16);
+    assert_eq!(events[15]["event"], "finished");
+    for e in &events[..15] {
+        assert_eq!(e["event"], "trial");
+        // The onset measured on the loopback follows the scheduled one by the mock interface's latency.
+        let latency_s = e["measured_onset_s"].as_f64().unwrap() - e["scheduled_onset_s"].as_f64().unwrap();
+        assert!(latency_s > 0.0 && latency_s < 0.05, "{e}");
+        assert!(e.get("stimulus_id").is_none() && e.get("correct").is_none(), "blind: {e}");
+    }
+    // One drive per stimulus, recorded with every trial that plays it.
+    let record = SessionRecord::read(&out_dir).unwrap();
+    let mut hashes: Vec<(String, String)> =
+        record.progress.results.iter().flatten().map(|r| (r.stimulus_id.clone(), r.drive_hash.clone())).collect();
+    hashes.sort();
+    hashes.dedup();
+    assert_eq!(hashes.len(), 3, "{hashes:?}");
+
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["experiment", "report", out_dir.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["experiment"], "three-points");
+    let p = &report["participants"][0];
+    assert_eq!(p["id"], "sim:seed=3");
+    assert_eq!(p["scored_trials"], 12);
+    // Focused on points 8 cm apart, far above threshold: the simulated participant is near perfect.
+    assert!(p["correct"].as_u64().unwrap() >= 10, "{report}");
+}
+
+#[test]
+fn a_session_killed_with_sigkill_resumes_with_the_same_plan_and_results() {
+    // 10 repeats (33 trials, some 15 ms each here), so that a loaded machine still kills it mid-session.
+    let file = fresh("long.toml");
+    std::fs::write(&file, experiment_file(10, 0.5)).unwrap();
+    let file = &file;
+    let whole = fresh("sim-uninterrupted");
+    let out = command(&run_args(file, "sim:seed=3", &whole)).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    let split = fresh("sim-killed");
+    let args = run_args(file, "sim:seed=3", &split);
+    let mut child = command(&args).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let journal = split.join(JOURNAL_FILE);
+    let started = Instant::now();
+    let lines = || std::fs::read_to_string(&journal).map_or(0, |t| t.lines().count());
+    while lines() < 4 {
+        assert!(started.elapsed() < Duration::from_secs(120), "no 4 journal lines in 2 minutes");
+        assert!(child.try_wait().unwrap().is_none(), "the session ended before it was killed");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let killed = SessionRecord::read(&split).unwrap();
+    let answered = killed.progress.results.iter().flatten().count();
+    assert!((4..33).contains(&answered), "killed after {answered} trials");
+
+    let out = command(&args).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::read(whole.join("plan.json")).unwrap(), std::fs::read(split.join("plan.json")).unwrap());
+    assert_eq!(results(&whole), results(&split));
+}
+
+#[test]
+fn a_changed_experiment_file_is_refused_on_resume_unless_forced() {
+    let original = fresh("changed.toml");
+    std::fs::write(&original, experiment_file(4, 0.5)).unwrap();
+    let dir = fresh("changed-session");
+    // One trial answered at the console, then the input ends: the session stops, resumable.
+    let out = run_with_stdin(&run_args(&original, "P07", &dir), "2\n");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    std::fs::write(&original, experiment_file(4, 0.75)).unwrap();
+    let out = run_with_stdin(&run_args(&original, "P07", &dir), "1\n");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("experiment file hash"), "{stderr}");
+    let mut forced = run_args(&original, "P07", &dir);
+    forced.push("--force".into());
+    let out = run_with_stdin(&forced, "1\n");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let record = SessionRecord::read(&dir).unwrap();
+    assert!(matches!(record.entries[1], Entry::Forced { .. }), "{:?}", record.entries);
+    assert_eq!(record.progress.results.iter().flatten().count(), 2);
+    // Another participant's session is refused too.
+    let out = run_with_stdin(&run_args(&original, "P08", &dir), "1\n");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("participant `P07`"));
+}
+
+#[test]
+fn the_console_journals_undo_and_void_as_new_entries_and_stays_blind() {
+    let (.., file, _) = fixtures();
+    let dir = fresh("console");
+    // Answer 1; undo it and answer 2; void the next; an unknown key; repeat the stimulus, answer 3; pause, go on,
+    // answer 1; then the input ends.
+    let out = run_with_stdin(&run_args(file, "P01", &dir), "1\nu\n2\nv\nq\nr\n3\np\n\n1\n");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("trial 1 of 15: 1 left  2 centre  3 right"), "{stderr}");
+    assert!(stderr.contains("`q` is not a key here"), "{stderr}");
+    assert!(stderr.contains("stopped with 3 of 15"), "{stderr}");
+    assert!(!stderr.contains("at-"), "the console shows no stimulus: {stderr}");
+
+    let record = SessionRecord::read(&dir).unwrap();
+    let kinds: Vec<&str> = record
+        .entries
+        .iter()
+        .map(|e| match e {
+            Entry::Trial(_) => "trial",
+            Entry::Undo { .. } => "undo",
+            Entry::Void { .. } => "void",
+            Entry::Correction { .. } => "correction",
+            Entry::Forced { .. } => "forced",
+        })
+        .collect();
+    assert_eq!(kinds, ["trial", "undo", "trial", "void", "trial", "trial"]);
+    let Entry::Trial(first) = &record.entries[0] else { unreachable!() };
+    let Entry::Trial(again) = &record.entries[2] else { unreachable!() };
+    assert_eq!((first.trial, first.response.as_str()), (0, "left"));
+    assert_eq!((again.trial, again.response.as_str()), (0, "centre"));
+    let Entry::Void { trial: voided, .. } = record.entries[3] else { unreachable!() };
+    let Entry::Trial(repeated) = &record.entries[4] else { unreachable!() };
+    assert_eq!((repeated.response.as_str(), repeated.repeats_requested), ("right", 1));
+    // The voided trial is asked again at the end.
+    assert_eq!(record.progress.queue.last(), Some(&voided));
+    assert!(record.progress.results[voided as usize].is_none());
+}
+
+#[test]
+fn a_built_in_whose_pixels_share_a_measured_point_is_refused_with_nothing_written() {
+    let dir = fresh("builtin");
+    let out = command(&run_args(Path::new("pixel-identification"), "sim", &dir)).output().unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("snap to the same measured point"), "{stderr}");
+    assert!(!dir.exists());
+}
