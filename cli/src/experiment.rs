@@ -33,6 +33,9 @@ enum ExperimentCommand {
     /// Run one participant's session on the rig (the mock lab of --scene, or --hardware FILE): the plan stored
     /// before the first trial, every trial journalled as it ends, resumed after a crash at the next trial.
     Run(Box<crate::experiment_run::RunArgs>),
+    /// How a scan renders experiments' stimuli: each stimulus's predicted peak velocity at its target, null and
+    /// other pixels at the drive level, and the suppression (weakest target over strongest null, dB).
+    Stimuli(Box<crate::experiment_stimuli::StimuliArgs>),
     /// Report session directories of one experiment: per participant and condition, accuracy with a Wilson 95 %
     /// interval, the exact one-sided binomial p against chance, the confusion matrix, trial times where recorded;
     /// pooled over participants.
@@ -57,6 +60,7 @@ pub fn run(args: &ExperimentArgs) -> anyhow::Result<()> {
     match &args.command {
         ExperimentCommand::List { json } => list(*json),
         ExperimentCommand::Run(args) => crate::experiment_run::run(args),
+        ExperimentCommand::Stimuli(args) => crate::experiment_stimuli::run(args),
         ExperimentCommand::Report { dirs, json, parquet, figures } => {
             report(dirs, *json, parquet.as_deref(), figures.as_deref())
         }

@@ -38,7 +38,7 @@ use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_control::target::Waveform;
 use metaplate_core::hash::fnv1a_64;
-use metaplate_core::rig::Rig;
+use metaplate_core::rig::{Rig, Wiring};
 use metaplate_experiment::file::{HASH_PREFIX, Presentation};
 use metaplate_experiment::{
     Entry, Experiment, FieldAtPixels, Plan, PlannedTrial, Session, SessionRecord, SimParticipant, Stimulus,
@@ -101,13 +101,19 @@ pub struct RunArgs {
     cache: crate::cache::CacheArgs,
 }
 
+/// How stimuli are driven: through the calibration in `calibration`, at `level` (full scale 1).
+pub(crate) struct DriveOptions {
+    pub calibration: PathBuf,
+    pub level: f64,
+}
+
 /// A stimulus rendered and checked, ready to play.
-struct Prepared {
-    pattern: Pattern,
+pub(crate) struct Prepared {
+    pub pattern: Pattern,
     /// `fnv1a64:` over the drive samples' bits and the level.
-    drive_hash: String,
+    pub drive_hash: String,
     /// What the simulated participant feels (m/s), `None` for a human participant.
-    field: Option<FieldAtPixels>,
+    pub field: Option<FieldAtPixels>,
 }
 
 /// Who answers.
@@ -170,7 +176,8 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     // written.
     let mut prepared: BTreeMap<String, Prepared> = BTreeMap::new();
     for stimulus in &experiment.stimuli {
-        let p = prepare_stimulus(&dataset, args, &experiment, stimulus, seed, &rig, sim.is_some())
+        let drive = DriveOptions { calibration: args.calibration.clone(), level: args.level };
+        let p = prepare_stimulus(&dataset, &drive, &experiment, stimulus, seed, &rig.wiring, sim.is_some())
             .with_context(|| format!("preparing the stimulus `{}`", stimulus.id))?;
         prepared.insert(stimulus.id.clone(), p);
     }
@@ -239,13 +246,13 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
 
 /// Renders `stimulus` (noise drawn from `seed`) through the calibration and prepares it for `rig`; for a simulated
 /// participant also the field it feels.
-fn prepare_stimulus(
+pub(crate) fn prepare_stimulus(
     dataset: &Dataset,
-    args: &RunArgs,
+    drive: &DriveOptions,
     experiment: &Experiment,
     stimulus: &Stimulus,
     seed: u64,
-    rig: &Rig,
+    wiring: &Wiring,
     for_sim: bool,
 ) -> anyhow::Result<Prepared> {
     let lead_s = dataset.ir_len() as f64 / dataset.sample_rate_hz();
@@ -264,7 +271,7 @@ fn prepare_stimulus(
             label: format!("{}: {}", pixel.name, waveform_kind(waveform)),
         });
     }
-    let pattern = play::prepare(dataset, &specs, &args.calibration, &options, &rig.wiring, args.level)?;
+    let pattern = play::prepare(dataset, &specs, &drive.calibration, &options, wiring, drive.level)?;
     // Two pixels on one measured point would be asked to do two things at once: the scan is too coarse for the
     // experiment's pixels.
     let name = |k: usize| experiment.pixels[pixels[k].pixel].name.as_str();
@@ -280,7 +287,7 @@ fn prepare_stimulus(
         }
     }
     let bytes = pattern.rendered.signals.iter().flatten().flat_map(|v| v.to_bits().to_le_bytes());
-    let drive_hash = format!("{HASH_PREFIX}{:016x}", fnv1a_64(bytes.chain(args.level.to_bits().to_le_bytes())));
+    let drive_hash = format!("{HASH_PREFIX}{:016x}", fnv1a_64(bytes.chain(drive.level.to_bits().to_le_bytes())));
     let field = if for_sim {
         // The answer is about the target pixels: predict them alone against silence elsewhere (for a stimulus
         // whose other pixels are null already, that is the stimulus itself).
@@ -295,7 +302,7 @@ fn prepare_stimulus(
         let peaks_m_s: Vec<f64> = if alone.iter().zip(&specs).all(|(a, s)| a.target == s.target) {
             pattern.pixels.iter().map(|p| p.predicted_peak_mm_s * 1e-3).collect()
         } else {
-            let probe = play::prepare(dataset, &alone, &args.calibration, &options, &rig.wiring, args.level)?;
+            let probe = play::prepare(dataset, &alone, &drive.calibration, &options, wiring, drive.level)?;
             probe.pixels.iter().map(|p| p.predicted_peak_mm_s * 1e-3).collect()
         };
         let pick = |target: bool| -> Vec<f64> {

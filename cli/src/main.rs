@@ -13,6 +13,7 @@ mod demo;
 mod devices;
 mod experiment;
 mod experiment_run;
+mod experiment_stimuli;
 mod export;
 mod focus;
 mod import;

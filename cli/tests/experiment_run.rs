@@ -271,3 +271,39 @@ fn a_built_in_whose_pixels_share_a_measured_point_is_refused_with_nothing_writte
     assert!(stderr.contains("snap to the same measured point"), "{stderr}");
     assert!(!dir.exists());
 }
+
+#[test]
+fn the_stimuli_report_gives_each_pixels_predicted_peak_and_the_suppression() {
+    let (cal, scan, experiment, _) = fixtures();
+    let args = [
+        "experiment",
+        "stimuli",
+        experiment.to_str().unwrap(),
+        "--data",
+        scan.to_str().unwrap(),
+        "--calibration",
+        cal.to_str().unwrap(),
+        "--json",
+    ];
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let stimuli = doc["experiments"][0]["stimuli"].as_array().unwrap();
+    assert_eq!(stimuli.len(), 3, "{doc}");
+    for s in stimuli {
+        let roles: Vec<&str> = s["pixels"].as_array().unwrap().iter().map(|p| p["role"].as_str().unwrap()).collect();
+        assert_eq!(roles.iter().filter(|r| **r == "target").count(), 1, "{s}");
+        assert_eq!(roles.iter().filter(|r| **r == "null").count(), 2, "{s}");
+        // Three of the scan's six points with eight actuators: the nulls are met almost exactly (the inverse
+        // filter's regularisation leaves a residue), the target's burst reaches millimetres per second.
+        let target = s["target_min_mm_s"].as_f64().unwrap();
+        assert!((0.1..100.0).contains(&target), "{s}");
+        assert!(s["suppression_db"].as_f64().unwrap() > 20.0, "{s}");
+    }
+    // The built-ins on the coarse scan: refused as `run` refuses them, naming why.
+    let mut builtin = args;
+    builtin[2] = "pixel-identification";
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate")).args(builtin).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("snap to the same measured point"));
+}

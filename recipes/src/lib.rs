@@ -23,7 +23,7 @@ pub mod remaining;
 
 pub use engine::acquire::RetryPolicy;
 pub use engine::aim::AimPolicy;
-pub use engine::rig_record::rig_config;
+pub use engine::rig_record::{recorded_wiring, rig_config};
 pub use engine::session::RecoveryPolicy;
 pub use error::RecipeError;
 pub use events::{Event, Observer, Phase, RunControl, Silent, UnitPosition};

@@ -1,0 +1,140 @@
+//! `metaplate experiment stimuli`: how well a scan renders an experiment's stimuli, before anyone touches the
+//! plate. Each stimulus is rendered as `experiment run` renders it (through the calibration, at the level), and the
+//! predicted peak velocity at each of its pixels is reported: at the target pixels (what the participant must
+//! find), at the null pixels (actively suppressed) and at the others (a distractor's pattern), with the
+//! suppression, the weakest target's peak over the strongest null's, in dB.
+//!
+//! The prediction is the scan's: `G` measured through the calibrated actuators, the drives peak-normalised to the
+//! level as played. On the mock lab a scan's Green's functions lie within -35 to -49 dB of the plate's truth, so the
+//! figures are the truth's to a fraction of a decibel.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+use metaplate_control::target::Waveform;
+use metaplate_experiment::builtin;
+use metaplate_recipes::drive::DRIVE_PEAK_FS;
+use metaplate_recipes::recorded_wiring;
+use metaplate_store::Dataset;
+use serde_json::{Value, json};
+
+use crate::experiment_run::{DriveOptions, prepare_stimulus};
+
+/// Arguments of `metaplate experiment stimuli`.
+#[derive(Args, Debug)]
+pub struct StimuliArgs {
+    /// Experiments: built-in names or experiment files (default: the paper's four).
+    experiments: Vec<String>,
+    /// The scan the stimuli are rendered from (measured through --calibration; the pixels snap to its points).
+    #[arg(long)]
+    data: PathBuf,
+    /// The calibration the scan was measured through.
+    #[arg(long)]
+    calibration: PathBuf,
+    /// Drive level relative to full scale, as `experiment run --level`.
+    #[arg(long, default_value_t = DRIVE_PEAK_FS)]
+    level: f64,
+    /// Seed of the stimuli's noise (default: each experiment's plan seed).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Print JSON: `{"level", "experiments": [{"name", "stimuli": [{"id", "pixels": [{"name", "role",
+    /// "predicted_peak_mm_s"}], "target_min_mm_s", "null_max_mm_s", "suppression_db"}]}]}`.
+    #[arg(long)]
+    json: bool,
+}
+
+/// What a pixel does in a stimulus.
+fn role(target: bool, waveform: &Waveform) -> &'static str {
+    match (target, waveform.is_null()) {
+        (true, _) => "target",
+        (false, true) => "null",
+        (false, false) => "other",
+    }
+}
+
+/// Runs `metaplate experiment stimuli`.
+pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
+    let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
+    let wiring = recorded_wiring(&dataset.manifest().meta.config)
+        .with_context(|| format!("the rig {} was measured on", args.data.display()))?;
+    let drive = DriveOptions { calibration: args.calibration.clone(), level: args.level };
+    let names: Vec<String> = if args.experiments.is_empty() {
+        builtin::names().iter().map(|n| (*n).to_owned()).collect()
+    } else {
+        args.experiments.clone()
+    };
+    let mut experiments = Vec::new();
+    for name in &names {
+        let experiment = builtin::resolve(name)?;
+        let seed = args.seed.unwrap_or(experiment.order.seed);
+        let mut stimuli = Vec::new();
+        for stimulus in &experiment.stimuli {
+            let prepared = prepare_stimulus(&dataset, &drive, &experiment, stimulus, seed, &wiring, false)
+                .with_context(|| format!("`{}`: rendering the stimulus `{}`", experiment.name, stimulus.id))?;
+            let waveforms = stimulus.waveforms(&experiment, seed)?;
+            let pixels: Vec<(String, &'static str, f64)> = waveforms
+                .iter()
+                .zip(&prepared.pattern.pixels)
+                .map(|(pw, p)| {
+                    (experiment.pixels[pw.pixel].name.clone(), role(pw.target, &pw.waveform), p.predicted_peak_mm_s)
+                })
+                .collect();
+            let peaks = |want: &str| pixels.iter().filter(|p| p.1 == want).map(|p| p.2).collect::<Vec<f64>>();
+            let target_min = peaks("target").into_iter().reduce(f64::min);
+            let null_max = peaks("null").into_iter().reduce(f64::max);
+            let suppression_db = match (target_min, null_max) {
+                (Some(t), Some(n)) if t > 0.0 && n > 0.0 => Some(20.0 * (t / n).log10()),
+                _ => None,
+            };
+            stimuli.push(json!({
+                "id": stimulus.id,
+                "pixels": pixels.iter().map(|(name, role, peak)| {
+                    json!({"name": name, "role": role, "predicted_peak_mm_s": peak})
+                }).collect::<Vec<_>>(),
+                "target_min_mm_s": target_min,
+                "null_max_mm_s": null_max,
+                "suppression_db": suppression_db,
+            }));
+        }
+        experiments.push(json!({"name": experiment.name, "stimuli": stimuli}));
+    }
+    let document = json!({"dataset": args.data, "level": args.level, "experiments": experiments});
+    if args.json {
+        println!("{document}");
+    } else {
+        print_table(&document);
+    }
+    Ok(())
+}
+
+fn print_table(document: &Value) {
+    println!("predicted peak velocity at full-scale level {} (mm/s)", document["level"]);
+    println!(
+        "{:<26} {:<22} {:>12} {:>12} {:>12} {:>15}",
+        "experiment", "stimulus", "target min", "null max", "other max", "suppression dB"
+    );
+    for e in document["experiments"].as_array().into_iter().flatten() {
+        for s in e["stimuli"].as_array().into_iter().flatten() {
+            let max_of = |role: &str| {
+                s["pixels"]
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .filter(|p| p["role"] == role)
+                    .filter_map(|p| p["predicted_peak_mm_s"].as_f64())
+                    .reduce(f64::max)
+            };
+            let cell = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.2}"));
+            println!(
+                "{:<26} {:<22} {:>12} {:>12} {:>12} {:>15}",
+                e["name"].as_str().unwrap_or(""),
+                s["id"].as_str().unwrap_or(""),
+                cell(s["target_min_mm_s"].as_f64()),
+                cell(s["null_max_mm_s"].as_f64()),
+                cell(max_of("other")),
+                s["suppression_db"].as_f64().map_or_else(|| "-".to_owned(), |v| format!("{v:.1}")),
+            );
+        }
+    }
+}
