@@ -1,8 +1,10 @@
 //! `metaplate experiment stimuli`: how well a scan renders an experiment's stimuli, before anyone touches the
 //! plate. Each stimulus is rendered as `experiment run` renders it (through the calibration, at the level), and the
 //! predicted peak velocity at each of its pixels is reported: at the target pixels (what the participant must
-//! find), at the null pixels (actively suppressed) and at the others (a distractor's pattern), with the
-//! suppression, the weakest target's peak over the strongest null's, in dB.
+//! find), at the null pixels (actively suppressed) and at the others (a distractor's pattern), at the pixel's point
+//! and within a fingertip's reach of it (`--fingertip-radius-m`, 5 mm: a null is met at a point, and beside it the
+//! field can be large where waves are long). The suppression is the weakest target's peak at its point over the
+//! strongest null's within reach, in dB.
 //!
 //! The prediction is the scan's: `G` measured through the calibrated actuators, the drives peak-normalised to the
 //! level as played. On the mock lab a scan's Green's functions lie within -35 to -49 dB of the plate's truth, so the
@@ -35,11 +37,18 @@ pub struct StimuliArgs {
     /// Drive level relative to full scale, as `experiment run --level`.
     #[arg(long, default_value_t = DRIVE_PEAK_FS)]
     level: f64,
+    /// A fingertip's reach, m: a null pixel's figure is the largest predicted peak at the measured points within
+    /// this distance of it (the field at one point can be nulled while a finger resting there still feels the field
+    /// beside it). The default, 5 mm, is a fingertip's contact radius: on the paper's 5 mm grid it takes the four
+    /// neighbours; on a coarser scan only the point.
+    #[arg(long, default_value_t = 0.005)]
+    fingertip_radius_m: f64,
     /// Seed of the stimuli's noise (default: each experiment's plan seed).
     #[arg(long)]
     seed: Option<u64>,
     /// Print JSON: `{"level", "experiments": [{"name", "stimuli": [{"id", "pixels": [{"name", "role",
-    /// "predicted_peak_mm_s"}], "target_min_mm_s", "null_max_mm_s", "suppression_db"}]}]}`.
+    /// "predicted_peak_mm_s", "within_fingertip_mm_s"}], "target_min_mm_s", "null_max_mm_s", "suppression_db"}]}]}`
+    /// (`null_max_mm_s` within reach).
     #[arg(long)]
     json: bool,
 }
@@ -73,24 +82,32 @@ pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
             let prepared = prepare_stimulus(&dataset, &drive, &experiment, stimulus, seed, &wiring, false)
                 .with_context(|| format!("`{}`: rendering the stimulus `{}`", experiment.name, stimulus.id))?;
             let waveforms = stimulus.waveforms(&experiment, seed)?;
-            let pixels: Vec<(String, &'static str, f64)> = waveforms
+            // The field within a fingertip's reach of each pixel, as a multiple of the field at its point.
+            let rendered = &prepared.pattern.rendered;
+            let at_point = rendered.field_at_pixels()?;
+            let within = rendered.peaks_within(&dataset.manifest().meta.grid, args.fingertip_radius_m)?;
+            let pixels: Vec<(String, &'static str, f64, f64)> = waveforms
                 .iter()
                 .zip(&prepared.pattern.pixels)
-                .map(|(pw, p)| {
-                    (experiment.pixels[pw.pixel].name.clone(), role(pw.target, &pw.waveform), p.predicted_peak_mm_s)
+                .zip(at_point.iter().zip(&within))
+                .map(|((pw, p), (v, near))| {
+                    let point_peak = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+                    let reach = if point_peak > 0.0 { near / point_peak } else { 1.0 };
+                    let name = experiment.pixels[pw.pixel].name.clone();
+                    (name, role(pw.target, &pw.waveform), p.predicted_peak_mm_s, p.predicted_peak_mm_s * reach)
                 })
                 .collect();
-            let peaks = |want: &str| pixels.iter().filter(|p| p.1 == want).map(|p| p.2).collect::<Vec<f64>>();
-            let target_min = peaks("target").into_iter().reduce(f64::min);
-            let null_max = peaks("null").into_iter().reduce(f64::max);
+            // Targets at their point (the focus); nulls over the fingertip (what the finger beside the focus feels).
+            let target_min = pixels.iter().filter(|p| p.1 == "target").map(|p| p.2).reduce(f64::min);
+            let null_max = pixels.iter().filter(|p| p.1 == "null").map(|p| p.3).reduce(f64::max);
             let suppression_db = match (target_min, null_max) {
                 (Some(t), Some(n)) if t > 0.0 && n > 0.0 => Some(20.0 * (t / n).log10()),
                 _ => None,
             };
             stimuli.push(json!({
                 "id": stimulus.id,
-                "pixels": pixels.iter().map(|(name, role, peak)| {
-                    json!({"name": name, "role": role, "predicted_peak_mm_s": peak})
+                "pixels": pixels.iter().map(|(name, role, peak, near)| {
+                    json!({"name": name, "role": role, "predicted_peak_mm_s": peak, "within_fingertip_mm_s": near})
                 }).collect::<Vec<_>>(),
                 "target_min_mm_s": target_min,
                 "null_max_mm_s": null_max,
@@ -109,7 +126,11 @@ pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
 }
 
 fn print_table(document: &Value) {
-    println!("predicted peak velocity at full-scale level {} (mm/s)", document["level"]);
+    println!(
+        "predicted peak velocity at level {} of full scale, mm/s (targets at their point; nulls and others within a \
+         fingertip's reach)",
+        document["level"]
+    );
     println!(
         "{:<26} {:<22} {:>12} {:>12} {:>12} {:>15}",
         "experiment", "stimulus", "target min", "null max", "other max", "suppression dB"
@@ -122,7 +143,7 @@ fn print_table(document: &Value) {
                     .into_iter()
                     .flatten()
                     .filter(|p| p["role"] == role)
-                    .filter_map(|p| p["predicted_peak_mm_s"].as_f64())
+                    .filter_map(|p| p["within_fingertip_mm_s"].as_f64())
                     .reduce(f64::max)
             };
             let cell = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.2}"));

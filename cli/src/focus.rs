@@ -28,6 +28,7 @@ use metaplate_control::render::{
 };
 use metaplate_control::solve::{Method, Regularisation};
 use metaplate_control::target::{PixelTarget, Waveform};
+use metaplate_core::grid::GridSpec;
 use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_recipes::Calibration;
 use metaplate_store::Dataset;
@@ -295,6 +296,42 @@ impl Rendered {
             .map(|&p| self.g.row_of(p).context("internal: pixel not among the rows"))
             .collect::<Result<_, _>>()?;
         Ok(predicted_field(&self.g, &self.drives, Some(&rows), self.factor)?)
+    }
+
+    /// Per pixel, the largest |v| over one period at any measured point within `radius_m` of its point on `grid`
+    /// (the point itself included), in the units of [`Rendered::field_at_pixels`]: what a fingertip resting there
+    /// feels rather than the field at one point (a null is a point; beside it the field can be large).
+    ///
+    /// # Errors
+    /// A pixel's point off `grid`, a negative or non-finite radius, and [`predicted_field`]'s errors.
+    pub fn peaks_within(&self, grid: &GridSpec, radius_m: f64) -> anyhow::Result<Vec<f64>> {
+        if !(radius_m.is_finite() && radius_m >= 0.0) {
+            bail!("a radius of {radius_m} m (must be finite and >= 0)");
+        }
+        let position = |p: u32| -> anyhow::Result<(f64, f64)> {
+            anyhow::ensure!((p as usize) < grid.len(), "point {p} is off the {} x {} grid", grid.nx, grid.ny);
+            Ok(grid.position_m(p as usize))
+        };
+        let mut near: Vec<Vec<usize>> = Vec::with_capacity(self.points.len());
+        let mut rows: Vec<usize> = Vec::new();
+        for &pixel in &self.points {
+            let (x0, y0) = position(pixel)?;
+            let mut mine = Vec::new();
+            for (row, &p) in self.g.points().iter().enumerate() {
+                let (x, y) = position(p)?;
+                if (x - x0).hypot(y - y0) <= radius_m + 1e-9 {
+                    let at = rows.iter().position(|&r| r == row).unwrap_or_else(|| {
+                        rows.push(row);
+                        rows.len() - 1
+                    });
+                    mine.push(at);
+                }
+            }
+            near.push(mine);
+        }
+        let field = predicted_field(&self.g, &self.drives, Some(&rows), self.factor)?;
+        let peak = |v: &Vec<f64>| v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        Ok(near.iter().map(|mine| mine.iter().map(|&i| peak(&field[i])).fold(0.0, f64::max)).collect())
     }
 }
 

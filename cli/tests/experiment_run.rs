@@ -299,6 +299,22 @@ fn the_stimuli_report_gives_each_pixels_predicted_peak_and_the_suppression() {
         let target = s["target_min_mm_s"].as_f64().unwrap();
         assert!((0.1..100.0).contains(&target), "{s}");
         assert!(s["suppression_db"].as_f64().unwrap() > 20.0, "{s}");
+        // Within a fingertip's 5 mm (the scan's points are 8 cm apart): the point itself.
+        for p in s["pixels"].as_array().unwrap() {
+            assert_eq!(p["within_fingertip_mm_s"], p["predicted_peak_mm_s"], "{p}");
+        }
+    }
+    // A reach of 9 cm takes in the neighbouring points, where nothing is nulled: the nulls' figures grow.
+    let mut wide = args.to_vec();
+    wide.extend(["--fingertip-radius-m", "0.09"]);
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate")).args(&wide).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    for s in doc["experiments"][0]["stimuli"].as_array().unwrap() {
+        for p in s["pixels"].as_array().unwrap().iter().filter(|p| p["role"] == "null") {
+            let (at, near) = (p["predicted_peak_mm_s"].as_f64().unwrap(), p["within_fingertip_mm_s"].as_f64().unwrap());
+            assert!(near > 10.0 * at, "{p}");
+        }
     }
     // The built-ins on the coarse scan: refused as `run` refuses them, naming why.
     let mut builtin = args;
