@@ -294,7 +294,7 @@ fn print_tables(out: &mut impl Write, report: &Value, times: bool) -> anyhow::Re
     for (l, row) in labels.iter().zip(pooled["confusion"]["presented_by_answered"].as_array().unwrap_or(&empty)) {
         write!(out, "  {l:<10}")?;
         for n in row.as_array().unwrap_or(&empty) {
-            write!(out, " {n:>9}")?;
+            write!(out, " {:>9}", n.to_string())?;
         }
         writeln!(out)?;
     }
