@@ -31,6 +31,7 @@
 //! site per wired actuator) and DAQ and audio rates within a factor 2 of each other (as every recipe needs).
 
 mod bench;
+mod reciprocity;
 
 use std::fmt::Write as _;
 
