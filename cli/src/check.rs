@@ -65,10 +65,6 @@ pub struct CheckArgs {
 /// Grid points the LDV check visits: this many, spread along the plan.
 const LDV_POINTS: usize = 3;
 
-/// On the mock lab, a plan of at most this many points is prepared whole (64 points of 8 responses of 0.5 s take
-/// 100 MB).
-const PREPARE_WHOLE_PLAN_POINTS: usize = 64;
-
 /// Runs `metaplate check`.
 pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     let protocol = ExcitationProtocol::by_name(&args.protocol)?;
@@ -86,11 +82,12 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
             let plan = plan(&plate, args.grid)?;
-            // A small plan is prepared whole: the plate model's cost does not depend on the points, and a check,
-            // a calibration and a scan of the plan then share one cache entry. A large one: the LDV points only.
-            let mut points =
-                if plan.points.len() <= PREPARE_WHOLE_PLAN_POINTS { plan.points.clone() } else { ldv_points(&plan) };
-            points.extend(plate.driving_points());
+            // A small plan is prepared whole (shared with a scan of it); a large one: the LDV points only.
+            let points = plate.small_plan_points(&plan).unwrap_or_else(|| {
+                let mut points = ldv_points(&plan);
+                points.extend(plate.driving_points());
+                points
+            });
             let ldv_link = if args.ldv_pty { LdvLink::Pty } else { LdvLink::InProcess };
             let options = LabOptions {
                 seed: args.seed,
@@ -202,49 +199,22 @@ mod tests {
     use std::sync::Arc;
 
     use metaplate_core::clock::VirtualClock;
-    use metaplate_keypad::{ReportPrefix, TransportError};
+    use metaplate_keypad::{ReportPrefix, ScriptStep, ScriptedHid};
 
     use super::*;
 
     /// A keypad that sends `reports` (each after `after_s` of virtual time), then nothing.
-    struct ScriptedPad {
-        clock: Arc<VirtualClock>,
-        reports: Vec<(f64, Vec<u8>)>,
-    }
-
-    impl HidInput for ScriptedPad {
-        fn describe(&self) -> (String, String, String) {
-            ("Acme".into(), "Pad".into(), "7".into())
-        }
-
-        fn read_report(&mut self, timeout_s: f64) -> Result<Option<Vec<u8>>, TransportError> {
-            match self.reports.first() {
-                Some((after_s, _)) if *after_s <= timeout_s => {
-                    self.clock.advance(*after_s);
-                    Ok(Some(self.reports.remove(0).1))
-                }
-                _ => {
-                    self.clock.advance(timeout_s);
-                    Ok(None)
-                }
-            }
-        }
-
-        fn reopen(&mut self) -> Result<(), TransportError> {
-            Ok(())
-        }
-    }
-
-    fn pad(reports: Vec<(f64, Vec<u8>)>) -> Keypad<ScriptedPad> {
+    fn pad(reports: Vec<(f64, [u8; 8])>) -> Keypad<ScriptedHid> {
         let clock = Arc::new(VirtualClock::new());
-        Keypad::new(ScriptedPad { clock: Arc::clone(&clock), reports }, clock, ReportPrefix::None)
+        let script = reports.into_iter().map(|(after_s, bytes)| ScriptStep::boot_report(after_s, bytes)).collect();
+        Keypad::new(ScriptedHid::new(&clock, script), clock, ReportPrefix::None)
     }
 
     #[test]
     fn a_key_pressed_in_time_passes_and_silence_fails_by_name() {
         // Boot keyboard report: modifiers, reserved, six key slots; 0x1e is the key `1`.
-        let press = vec![0, 0, 0x1e, 0, 0, 0, 0, 0];
-        let outcome = keypad_check(&mut pad(vec![(2.0, press.clone())]), 10.0);
+        let press = [0, 0, 0x1e, 0, 0, 0, 0, 0];
+        let outcome = keypad_check(&mut pad(vec![(2.0, press)]), 10.0);
         assert!(outcome.passed && outcome.message.contains("key 0x1e Down"), "{}", outcome.message);
         let late = keypad_check(&mut pad(vec![(12.0, press)]), 10.0);
         assert!(!late.passed && late.message.contains("no key was pressed within 10 s"), "{}", late.message);

@@ -412,29 +412,10 @@ fn answered_stack(entries: &[Entry]) -> Vec<u32> {
 /// threads (so that a stimulus can repeat while the console waits).
 fn console_input(keypad: Option<Keypad<Box<dyn HidInput>>>) -> Receiver<String> {
     let (tx, rx) = std::sync::mpsc::channel();
-    if let Some(mut keypad) = keypad {
+    if let Some(keypad) = keypad {
         eprintln!("the keypad answers too: its keys are the console's");
         let tx = tx.clone();
-        std::thread::spawn(move || {
-            loop {
-                match keypad.next_event(KEYPAD_POLL_S) {
-                    Ok(Some(event)) if event.action == KeyAction::Down => {
-                        if let Some(c) = event.key.character()
-                            && tx.send(c.to_string()).is_err()
-                        {
-                            break;
-                        }
-                    }
-                    Ok(_) => {}
-                    Err(e) if e.suggests_reopen() => {
-                        eprintln!("keypad: {e}; reopening");
-                        std::thread::sleep(Duration::from_secs(1));
-                        let _ = keypad.reopen();
-                    }
-                    Err(e) => eprintln!("keypad: {e}"),
-                }
-            }
-        });
+        std::thread::spawn(move || forward_keypad_keys(keypad, |entry| tx.send(entry).is_ok()));
     }
     std::thread::spawn(move || {
         for line in std::io::stdin().lock().lines() {
@@ -445,6 +426,30 @@ fn console_input(keypad: Option<Keypad<Box<dyn HidInput>>>) -> Receiver<String> 
         }
     });
     rx
+}
+
+/// Hands each key pressed on `keypad` (a key down with a character: letters and digits) to `send` as a console
+/// entry of that one character; ignores releases and keys without a character, reopens a device that asks for it
+/// (a second later), and returns when `send` says the console is gone (returns false).
+fn forward_keypad_keys<H: HidInput>(mut keypad: Keypad<H>, send: impl Fn(String) -> bool) {
+    loop {
+        match keypad.next_event(KEYPAD_POLL_S) {
+            Ok(Some(event)) if event.action == KeyAction::Down => {
+                if let Some(c) = event.key.character()
+                    && !send(c.to_string())
+                {
+                    return;
+                }
+            }
+            Ok(_) => {}
+            Err(e) if e.suggests_reopen() => {
+                eprintln!("keypad: {e}; reopening");
+                std::thread::sleep(Duration::from_secs(1));
+                let _ = keypad.reopen();
+            }
+            Err(e) => eprintln!("keypad: {e}"),
+        }
+    }
 }
 
 fn console_trial(
@@ -549,5 +554,46 @@ fn console_trial(
                 options.join(", ")
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
+
+    use std::sync::Arc;
+
+    use metaplate_core::clock::VirtualClock;
+    use metaplate_keypad::{ReportPrefix, ScriptStep, ScriptedHid, TransportError};
+
+    use super::*;
+
+    #[test]
+    fn the_keypads_key_presses_are_console_entries() {
+        // Boot keyboard reports (modifiers, reserved, six key slots): `2` (usage 0x1f) down and up, a shift alone,
+        // `u` (0x18), an unplugged pad (reopened), `r` (0x15), then `z` (0x1d) an hour later, which finds the
+        // console gone.
+        let key = |usage: u8| [0, 0, usage, 0, 0, 0, 0, 0];
+        let script = vec![
+            ScriptStep::boot_report(0.5, key(0x1f)),
+            ScriptStep::boot_report(0.1, key(0)),
+            ScriptStep::boot_report(0.2, [0x02, 0, 0, 0, 0, 0, 0, 0]),
+            ScriptStep::boot_report(0.2, [0; 8]),
+            ScriptStep::boot_report(0.3, key(0x18)),
+            ScriptStep::boot_report(0.1, key(0)),
+            ScriptStep::Fail(TransportError::Disconnected("unplugged".into())),
+            ScriptStep::boot_report(0.3, key(0x15)),
+            ScriptStep::boot_report(0.1, key(0)),
+            ScriptStep::boot_report(3600.0, key(0x1d)),
+        ];
+        let clock = Arc::new(VirtualClock::new());
+        let keypad = Keypad::new(ScriptedHid::new(&clock, script), clock, ReportPrefix::None);
+        // A channel without a buffer: the last key's hand-over waits for the console, which is gone by then.
+        let (tx, rx) = std::sync::mpsc::sync_channel::<String>(0);
+        let forwarder = std::thread::spawn(move || forward_keypad_keys(keypad, |entry| tx.send(entry).is_ok()));
+        let entries: Vec<String> = (0..3).map(|_| rx.recv_timeout(Duration::from_secs(10)).unwrap()).collect();
+        assert_eq!(entries, ["2", "u", "r"]);
+        drop(rx);
+        forwarder.join().unwrap();
     }
 }

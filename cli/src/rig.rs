@@ -10,6 +10,7 @@ use metaplate_core::rig::Rig;
 use metaplate_core::scene::Scene;
 use metaplate_drivers::{HardwareError, HardwareFile, OpenedRig};
 use metaplate_lab::{LabOptions, MockLab};
+use metaplate_recipes::ScanPlan;
 use metaplate_store::SceneId;
 
 /// Why a rig could not be built.
@@ -72,7 +73,23 @@ impl Plate {
         let n = self.scene.grid.len();
         (0..self.scene.actuators.len()).map(|k| n + k).collect()
     }
+
+    /// The points a mock lab prepares for `plan` when the plan is small (at most [`PREPARE_WHOLE_PLAN_POINTS`]):
+    /// the plan's points and the actuators' driving points, so a `check`, and a scan of the same plan share one
+    /// Green's-function cache entry (the plate model's cost does not depend on the points). `None` for a larger
+    /// plan, whose caller prepares only what it visits.
+    pub fn small_plan_points(&self, plan: &ScanPlan) -> Option<Vec<usize>> {
+        (plan.points.len() <= PREPARE_WHOLE_PLAN_POINTS).then(|| {
+            let mut points = plan.points.clone();
+            points.extend(self.driving_points());
+            points
+        })
+    }
 }
+
+/// On the mock lab, a plan of at most this many points is prepared whole ([`Plate::small_plan_points`]; 64 points
+/// of 8 responses of 0.5 s take 100 MB).
+pub const PREPARE_WHOLE_PLAN_POINTS: usize = 64;
 
 /// The mock lab of `plate`'s scene, preparing only `points` (Green's functions are computed, or read from
 /// `cache_dir`, for those alone), with its rig. Keep the lab alive while the rig is used.

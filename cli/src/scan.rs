@@ -61,7 +61,8 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
             let plan = plan(&plate, args.grid)?;
-            let (lab, rig) = rig::mock_rig(&plate, plan.points.clone(), common.seed, common.cache.dir())?;
+            let points = plate.small_plan_points(&plan).unwrap_or_else(|| plan.points.clone());
+            let (lab, rig) = rig::mock_rig(&plate, points, common.seed, common.cache.dir())?;
             (plate, rig, Some(lab), plan)
         }
         (None, None) => anyhow::bail!("give --scene or --hardware"),

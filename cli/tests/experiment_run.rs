@@ -2,7 +2,8 @@
 //! tests/play.rs (seed 5; Green's functions cached under the target directory, shared with the other tests).
 //!
 //! The scan's six points are 8 cm apart, too coarse for the built-ins' fingertips 3.2 cm apart (refused: two pixels
-//! would share a point), so the sessions run a small experiment whose pixels are three of the scan's points.
+//! would share a point), so most sessions run a small experiment whose pixels are three of the scan's points; the
+//! paper's four built-ins run on the fixture's 7 x 5 scan.
 
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
@@ -163,18 +164,22 @@ fn a_simulated_session_runs_end_to_end_and_the_report_reads_it() {
     assert!(p["correct"].as_u64().unwrap() >= 10, "{report}");
 }
 
-#[test]
-fn a_session_killed_with_sigkill_resumes_with_the_same_plan_and_results() {
-    // 10 repeats (33 trials, some 15 ms each here), so that a loaded machine still kills it mid-session.
-    let file = fresh("long.toml");
-    std::fs::write(&file, experiment_file(10, 0.5)).unwrap();
-    let file = &file;
-    let whole = fresh("sim-uninterrupted");
-    let out = command(&run_args(file, "sim:seed=3", &whole)).output().unwrap();
+/// Runs `experiment` (a file or a built-in's name) twice with `sim:seed=3` on `scan`: once whole, once killed
+/// with SIGKILL after its fourth journal entry and resumed. Both must have the same plan and the same results
+/// (clock times apart). Returns the whole session's directory.
+fn whole_and_killed_sessions_agree(experiment: &Path, scan: &Path, name: &str, trials: usize) -> PathBuf {
+    let with_scan = |out: &Path| {
+        let mut args = run_args(experiment, "sim:seed=3", out);
+        let at = args.iter().position(|a| a == "--data").unwrap() + 1;
+        args[at] = scan.to_str().unwrap().to_owned();
+        args
+    };
+    let whole = fresh(&format!("{name}-uninterrupted"));
+    let out = command(&with_scan(&whole)).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 
-    let split = fresh("sim-killed");
-    let args = run_args(file, "sim:seed=3", &split);
+    let split = fresh(&format!("{name}-killed"));
+    let args = with_scan(&split);
     let mut child = command(&args).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
     let journal = split.join(JOURNAL_FILE);
     let started = Instant::now();
@@ -188,12 +193,76 @@ fn a_session_killed_with_sigkill_resumes_with_the_same_plan_and_results() {
     child.wait().unwrap();
     let killed = SessionRecord::read(&split).unwrap();
     let answered = killed.progress.results.iter().flatten().count();
-    assert!((4..33).contains(&answered), "killed after {answered} trials");
+    assert!((4..trials).contains(&answered), "killed after {answered} of {trials} trials");
 
     let out = command(&args).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(std::fs::read(whole.join("plan.json")).unwrap(), std::fs::read(split.join("plan.json")).unwrap());
-    assert_eq!(results(&whole), results(&split));
+    let results = results(&whole);
+    assert_eq!(results.len(), trials);
+    assert_eq!(results, self::results(&split));
+    whole
+}
+
+#[test]
+fn a_session_killed_with_sigkill_resumes_with_the_same_plan_and_results() {
+    // 10 repeats (33 trials, some 15 ms each here), so that a loaded machine still kills it mid-session.
+    let file = fresh("long.toml");
+    std::fs::write(&file, experiment_file(10, 0.5)).unwrap();
+    whole_and_killed_sessions_agree(&file, &fixtures().1, "three-points", 33);
+}
+
+/// A built-in experiment on the 7 x 5 scan ([`common::fingertip_scan`], where the five fingertips snap to five
+/// points): the simulated participant's sessions, whole and killed then resumed, agree
+/// ([`whole_and_killed_sessions_agree`]), and `experiment report --json` reads them: `scored` trials, and an
+/// accuracy far above `chance`.
+fn built_in_runs_resumes_and_is_reported(name: &str, trials: usize, scored: u64, chance: f64) -> Value {
+    let dir = whole_and_killed_sessions_agree(Path::new(name), &common::fingertip_scan(), name, trials);
+    let out = command(&["experiment".into(), "report".into(), dir.to_str().unwrap().into(), "--json".into()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["experiment"], name);
+    assert_eq!(report["chance"].as_f64(), Some(chance));
+    let pooled = &report["pooled"];
+    assert_eq!(pooled["scored_trials"].as_u64(), Some(scored), "{report}");
+    // The fingertips' points are 3.2 cm apart, the focus is tens of dB above the nulls there (the README's
+    // stimulus table), so the simulated participant errs only by its 2 % lapse: 90 % leaves room for a few lapses
+    // (P(more than 5 lapses in 50) < 0.1 %), and the Wilson interval must clear chance.
+    let accuracy = pooled["accuracy"].as_f64().unwrap();
+    assert!(accuracy >= 0.9, "{report}");
+    assert!(pooled["wilson_95"][0].as_f64().unwrap() > chance, "{report}");
+    assert!(pooled["p_value"].as_f64().unwrap() < 1e-9, "{report}");
+    report
+}
+
+#[test]
+fn pixel_identification_runs_end_to_end_resumes_and_is_reported() {
+    let report = built_in_runs_resumes_and_is_reported("pixel-identification", 55, 50, 0.2);
+    // The confusion matrix is answered against presented over the five fingers.
+    let counts = report["pooled"]["confusion"]["presented_by_answered"].as_array().unwrap();
+    assert_eq!(counts.len(), 5, "{report}");
+}
+
+#[test]
+fn odd_one_out_exploration_runs_end_to_end_resumes_and_is_reported() {
+    let report = built_in_runs_resumes_and_is_reported("odd-one-out-exploration", 60, 50, 0.2);
+    // Experiment 2 records trial times: the stimulus repeats until the response.
+    for c in report["pooled"]["conditions"].as_array().unwrap() {
+        assert!(c["trial_time_s"]["median"].as_f64().unwrap() > 0.0, "{c}");
+    }
+}
+
+#[test]
+fn motion_direction_runs_end_to_end_resumes_and_is_reported() {
+    let report = built_in_runs_resumes_and_is_reported("motion-direction", 88, 80, 0.5);
+    assert_eq!(report["pooled"]["conditions"].as_array().unwrap().len(), 8, "{report}");
+}
+
+#[test]
+fn multi_touch_odd_one_out_runs_end_to_end_resumes_and_is_reported() {
+    built_in_runs_resumes_and_is_reported("multi-touch-odd-one-out", 55, 50, 0.2);
 }
 
 #[test]

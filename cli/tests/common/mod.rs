@@ -23,35 +23,42 @@ pub fn metaplate(args: &[&str]) -> Output {
         .unwrap()
 }
 
-/// A calibration (`calibrate --seed 5`) and a 3 x 2 quick scan through it (`scan --grid 3x2 --protocol quick
-/// --seed 5`) on the metamaterial scene's mock lab, written into `dir` (as `cal` and `scan`): the small scan the
-/// play and experiment tests render on (points at x -0.08, 0, 0.08 m and y -0.03, 0.03 m). Returns (calibration,
-/// scan).
+/// A calibration (`calibrate --seed 5`) and two quick scans through it (`scan --protocol quick --seed 5`) on the
+/// metamaterial scene's mock lab, written into `dir` (as `cal`, `scan` and `scan-7x5`):
+/// - `scan`, `--grid 3x2`: the small scan the play and experiment tests render on (points at x -0.08, 0, 0.08 m
+///   and y -0.03, 0.03 m);
+/// - `scan-7x5`: fine enough for the built-in experiments' fingertips (x -0.1 to 0.1 m in steps of 1/30 m, so
+///   the five pixels 3.2 cm apart on y = 0 snap to five points within 3 mm). It shares its Green's functions with
+///   `check --grid 7x5` (tests/check.rs), so in a test run it costs no plate computation of its own.
+///
+/// Returns (calibration, 3 x 2 scan).
 pub fn calibration_and_scan_3x2(dir: &Path) -> (PathBuf, PathBuf) {
-    let (cal, scan) = (dir.join("cal"), dir.join("scan"));
+    let cal = dir.join("cal");
     let out = metaplate(&["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let out = metaplate(&[
-        "scan",
-        "--scene",
-        "metamaterial",
-        "--protocol",
-        "quick",
-        "--grid",
-        "3x2",
-        "--seed",
-        "5",
-        "--calibration",
-        cal.to_str().unwrap(),
-        "--out",
-        scan.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    (cal, scan)
+    for (grid, name) in [("3x2", "scan"), ("7x5", "scan-7x5")] {
+        let out = metaplate(&[
+            "scan",
+            "--scene",
+            "metamaterial",
+            "--protocol",
+            "quick",
+            "--grid",
+            grid,
+            "--seed",
+            "5",
+            "--calibration",
+            cal.to_str().unwrap(),
+            "--out",
+            dir.join(name).to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    (cal, dir.join("scan"))
 }
 
-/// A calibration of the metamaterial mock lab (`calibrate --seed 5`) and a scan through it (`scan --grid 3x2
-/// --protocol quick --seed 5`): (calibration, scan). Made once per build of the binary and shared by every test
+/// The calibration and the 3 x 2 scan of [`calibration_and_scan_3x2`]: (calibration, scan); the 7 x 5 scan is
+/// [`fingertip_scan`]. Made once per build of the binary and shared by every test
 /// process that needs it (play, experiments): the first takes a lock file and builds them in a scratch directory
 /// renamed into place when complete; the others wait for it. Keyed by the binary's modification time, so a rebuilt
 /// binary makes its own.
@@ -60,7 +67,7 @@ pub fn calibrated_scan() -> (PathBuf, PathBuf) {
     let stamp = binary.modified().unwrap().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
     let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fixtures");
     std::fs::create_dir_all(&root).unwrap();
-    let done = root.join(format!("cal-scan-3x2-seed5-{stamp:x}"));
+    let done = root.join(format!("cal-scans-seed5-{stamp:x}"));
     let paths = |dir: &Path| (dir.join("cal"), dir.join("scan"));
     let lock = done.with_extension("lock");
     for _ in 0..1200 {
@@ -89,4 +96,11 @@ pub fn calibrated_scan() -> (PathBuf, PathBuf) {
         }
     }
     panic!("the calibrated scan fixture was not built within 10 minutes (lock {})", lock.display());
+}
+
+/// The 7 x 5 scan of [`calibration_and_scan_3x2`] (through the calibration [`calibrated_scan`] returns), from the
+/// same shared fixture.
+pub fn fingertip_scan() -> PathBuf {
+    let (cal, _) = calibrated_scan();
+    cal.with_file_name("scan-7x5")
 }

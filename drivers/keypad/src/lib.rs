@@ -7,10 +7,12 @@
 //! - [`hidapi`] (feature `hidraw`, Linux only): the real transport on the `hidapi` crate (pure-Rust hidraw backend:
 //!   no libudev).
 //! - [`driver`]: [`Keypad`], timestamped [`KeyEvent`]s on a [`metaplate_core::clock::Clock`].
+//! - [`scripted`]: [`ScriptedHid`], a fake device playing a script of reports (tests, rehearsals).
 
 pub mod driver;
 #[cfg(all(feature = "hidraw", target_os = "linux"))]
 pub mod hidapi;
+pub mod scripted;
 pub mod transport;
 
 pub use metaplate_keypad_protocol as report;
@@ -19,4 +21,5 @@ pub use metaplate_keypad_protocol as report;
 pub use self::hidapi::{HidListing, HidapiInput, HidapiSelector, keypads};
 pub use driver::{KeyEvent, Keypad, KeypadError, ReportPrefix};
 pub use metaplate_keypad_protocol::{BootDecoder, Key, KeyAction, KeyChange, ReportError};
+pub use scripted::{ScriptStep, ScriptedHid};
 pub use transport::{HidInput, TransportError};

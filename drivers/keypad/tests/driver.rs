@@ -1,73 +1,21 @@
 //! The keypad driver over a scripted fake transport and a virtual clock.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may unwrap: a panic is the test failing
 
-use std::collections::VecDeque;
 use std::sync::Arc;
 
 use metaplate_core::clock::{Clock, VirtualClock};
-use metaplate_keypad::{HidInput, Key, KeyAction, Keypad, KeypadError, ReportError, ReportPrefix, TransportError};
+use metaplate_keypad::{
+    Key, KeyAction, Keypad, KeypadError, ReportError, ReportPrefix, ScriptStep, ScriptedHid, TransportError,
+};
 
-/// What the fake does on one read: deliver a report after some seconds, fail, or time out.
-enum Step {
-    Report { after_s: f64, bytes: Vec<u8> },
-    Fail(TransportError),
+fn report(after_s: f64, bytes: [u8; 8]) -> ScriptStep {
+    ScriptStep::boot_report(after_s, bytes)
 }
 
-/// A transport that plays a script, advancing a virtual clock as time passes on the device side.
-struct FakeHid {
-    clock: Arc<VirtualClock>,
-    script: VecDeque<Step>,
-    /// Timeouts the driver asked for, s.
-    timeouts_s: Vec<f64>,
-    reopens: usize,
-}
-
-impl FakeHid {
-    fn new(clock: &Arc<VirtualClock>, script: Vec<Step>) -> Self {
-        Self { clock: Arc::clone(clock), script: script.into(), timeouts_s: Vec::new(), reopens: 0 }
-    }
-}
-
-impl HidInput for FakeHid {
-    fn describe(&self) -> (String, String, String) {
-        ("Fake".into(), "Pad".into(), "0001".into())
-    }
-
-    fn read_report(&mut self, timeout_s: f64) -> Result<Option<Vec<u8>>, TransportError> {
-        self.timeouts_s.push(timeout_s);
-        match self.script.pop_front() {
-            Some(Step::Report { after_s, bytes }) if after_s <= timeout_s => {
-                self.clock.advance(after_s);
-                Ok(Some(bytes))
-            }
-            Some(Step::Report { after_s, bytes }) => {
-                // Not yet: the report stays in the script, later by the time waited.
-                self.script.push_front(Step::Report { after_s: after_s - timeout_s, bytes });
-                self.clock.advance(timeout_s);
-                Ok(None)
-            }
-            Some(Step::Fail(error)) => Err(error),
-            None => {
-                self.clock.advance(timeout_s);
-                Ok(None)
-            }
-        }
-    }
-
-    fn reopen(&mut self) -> Result<(), TransportError> {
-        self.reopens += 1;
-        Ok(())
-    }
-}
-
-fn report(after_s: f64, bytes: [u8; 8]) -> Step {
-    Step::Report { after_s, bytes: bytes.to_vec() }
-}
-
-fn keypad(script: Vec<Step>) -> (Keypad<FakeHid>, Arc<VirtualClock>) {
+fn keypad(script: Vec<ScriptStep>) -> (Keypad<ScriptedHid>, Arc<VirtualClock>) {
     let clock = Arc::new(VirtualClock::new());
     let clock_dyn: Arc<dyn Clock> = clock.clone();
-    (Keypad::new(FakeHid::new(&clock, script), clock_dyn, ReportPrefix::None), clock)
+    (Keypad::new(ScriptedHid::new(&clock, script), clock_dyn, ReportPrefix::None), clock)
 }
 
 fn key(usage: u8) -> Key {
@@ -130,7 +78,7 @@ fn roll_over_is_counted_and_skipped() {
 #[test]
 fn bad_reports_and_bad_timeouts_are_typed_errors() {
     let (mut pad, _clock) = keypad(vec![
-        Step::Report { after_s: 0.0, bytes: vec![0; 7] },
+        ScriptStep::Report { after_s: 0.0, bytes: vec![0; 7] },
         report(0.0, [0, 0, 0x02, 0, 0, 0, 0, 0]),
         report(0.0, [0, 0, 0x05, 0, 0, 0, 0, 0]),
     ]);
@@ -148,10 +96,10 @@ fn report_ids_are_stripped_and_other_reports_ignored() {
     let clock = Arc::new(VirtualClock::new());
     let script = vec![
         // Report 2 (a consumer-control report of a composite device): ignored.
-        Step::Report { after_s: 0.0, bytes: vec![2, 0xE9, 0] },
-        Step::Report { after_s: 0.0, bytes: vec![1, 0, 0, 0x27, 0, 0, 0, 0, 0] },
+        ScriptStep::Report { after_s: 0.0, bytes: vec![2, 0xE9, 0] },
+        ScriptStep::Report { after_s: 0.0, bytes: vec![1, 0, 0, 0x27, 0, 0, 0, 0, 0] },
     ];
-    let mut pad = Keypad::new(FakeHid::new(&clock, script), clock.clone(), ReportPrefix::ReportId(1));
+    let mut pad = Keypad::new(ScriptedHid::new(&clock, script), clock.clone(), ReportPrefix::ReportId(1));
     let event = pad.next_event(1.0).unwrap().unwrap();
     assert_eq!((event.key, event.action), (key(0x27), KeyAction::Down));
 }
@@ -160,7 +108,7 @@ fn report_ids_are_stripped_and_other_reports_ignored() {
 fn a_disconnect_suggests_reopen_which_forgets_held_keys() {
     let (mut pad, _clock) = keypad(vec![
         report(0.0, [0, 0, 0x04, 0x05, 0, 0, 0, 0]),
-        Step::Fail(TransportError::Disconnected("unplugged".into())),
+        ScriptStep::Fail(TransportError::Disconnected("unplugged".into())),
         report(0.0, [0, 0, 0x05, 0, 0, 0, 0, 0]),
     ]);
     assert_eq!(pad.next_event(1.0).unwrap().unwrap().key, key(0x04));
