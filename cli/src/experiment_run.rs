@@ -37,6 +37,7 @@ use std::time::Duration;
 use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_control::target::Waveform;
+use metaplate_core::audio::AudioConfig;
 use metaplate_core::hash::fnv1a_64;
 use metaplate_core::rig::{Rig, Wiring};
 use metaplate_experiment::file::{HASH_PREFIX, Presentation};
@@ -151,9 +152,6 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             }
         }
     }
-    if experiment.masking.is_some() {
-        eprintln!("warning: the experiment's masking noise is not played (not implemented): mask by other means");
-    }
     let dataset = Dataset::open(&args.data).with_context(|| format!("opening dataset {}", args.data.display()))?;
     let plan = Plan::new(&experiment, args.seed.unwrap_or(experiment.order.seed));
     let stored = SessionRecord::read(&args.out).ok();
@@ -180,6 +178,17 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         let p = prepare_stimulus(&dataset, &drive, &experiment, stimulus, seed, &rig.wiring, sim.is_some())
             .with_context(|| format!("preparing the stimulus `{}`", stimulus.id))?;
         prepared.insert(stimulus.id.clone(), p);
+    }
+    if let Some(m) = &experiment.masking {
+        // The interface must open the masking pair too: asked now, so that a refusal comes with nothing written.
+        let channels = prepared.values().map(|p| p.pattern.playback.channels()).max().unwrap_or(0);
+        rig.audio
+            .configure(&AudioConfig { channels, ..rig.wiring.audio_config() })
+            .with_context(|| format!("opening the masking outputs {} and {}", m.channels[0], m.channels[1]))?;
+        eprintln!(
+            "masking: pink noise on outputs {} and {} at {} dB FS RMS while each stimulus plays",
+            m.channels[0], m.channels[1], m.level_dbfs
+        );
     }
     let mut session = Session::start(&args.out, &experiment, participant, plan, args.force)
         .with_context(|| format!("starting the session in {}", args.out.display()))?;
@@ -271,7 +280,15 @@ pub(crate) fn prepare_stimulus(
             label: format!("{}: {}", pixel.name, waveform_kind(waveform)),
         });
     }
-    let pattern = play::prepare(dataset, &specs, &drive.calibration, &options, wiring, drive.level)?;
+    let mut pattern = play::prepare(dataset, &specs, &drive.calibration, &options, wiring, drive.level)?;
+    if let Some(m) = &experiment.masking {
+        // Each stimulus its own masker, the same on every run of the plan's seed.
+        let noise_seed = seed ^ fnv1a_64(stimulus.id.bytes());
+        let ears = m.render(pattern.playback.frames(), wiring.audio_sample_rate_hz, noise_seed)?;
+        for (channel, noise) in m.channels.iter().zip(&ears) {
+            pattern.playback.add_output(u32::from(*channel), noise)?;
+        }
+    }
     // Two pixels on one measured point would be asked to do two things at once: the scan is too coarse for the
     // experiment's pixels.
     let name = |k: usize| experiment.pixels[pixels[k].pixel].name.as_str();

@@ -166,8 +166,8 @@ fn a_simulated_session_runs_end_to_end_and_the_report_reads_it() {
 
 /// Runs `experiment` (a file or a built-in's name) twice with `sim:seed=3` on `scan`: once whole, once killed
 /// with SIGKILL after its fourth journal entry and resumed. Both must have the same plan and the same results
-/// (clock times apart). Returns the whole session's directory.
-fn whole_and_killed_sessions_agree(experiment: &Path, scan: &Path, name: &str, trials: usize) -> PathBuf {
+/// (clock times apart). Returns the whole session's directory and what it printed on standard error.
+fn whole_and_killed_sessions_agree(experiment: &Path, scan: &Path, name: &str, trials: usize) -> (PathBuf, String) {
     let with_scan = |out: &Path| {
         let mut args = run_args(experiment, "sim:seed=3", out);
         let at = args.iter().position(|a| a == "--data").unwrap() + 1;
@@ -176,7 +176,8 @@ fn whole_and_killed_sessions_agree(experiment: &Path, scan: &Path, name: &str, t
     };
     let whole = fresh(&format!("{name}-uninterrupted"));
     let out = command(&with_scan(&whole)).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{stderr}");
 
     let split = fresh(&format!("{name}-killed"));
     let args = with_scan(&split);
@@ -201,7 +202,7 @@ fn whole_and_killed_sessions_agree(experiment: &Path, scan: &Path, name: &str, t
     let results = results(&whole);
     assert_eq!(results.len(), trials);
     assert_eq!(results, self::results(&split));
-    whole
+    (whole, stderr)
 }
 
 #[test]
@@ -217,7 +218,9 @@ fn a_session_killed_with_sigkill_resumes_with_the_same_plan_and_results() {
 /// ([`whole_and_killed_sessions_agree`]), and `experiment report --json` reads them: `scored` trials, and an
 /// accuracy far above `chance`.
 fn built_in_runs_resumes_and_is_reported(name: &str, trials: usize, scored: u64, chance: f64) -> Value {
-    let dir = whole_and_killed_sessions_agree(Path::new(name), &common::fingertip_scan(), name, trials);
+    let (dir, stderr) = whole_and_killed_sessions_agree(Path::new(name), &common::fingertip_scan(), name, trials);
+    // The paper's masker, on the interface's last two outputs beside the actuators' (the mock interface has 24).
+    assert!(stderr.contains("masking: pink noise on outputs 22 and 23 at -20 dB FS RMS"), "{stderr}");
     let out = command(&["experiment".into(), "report".into(), dir.to_str().unwrap().into(), "--json".into()])
         .output()
         .unwrap();

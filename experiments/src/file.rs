@@ -157,7 +157,8 @@ pub struct Masking {
     pub noise: String,
     /// Output channels of the audio interface (0-based), two distinct.
     pub channels: [u16; 2],
-    /// Level, dB re full scale (<= 0).
+    /// Level, dB re full scale, as the noise's RMS (<= 0; pink noise peaks about 12 dB above it, so above about
+    /// -12 dB FS it clips and is refused when played).
     pub level_dbfs: f64,
 }
 

@@ -54,12 +54,13 @@
 //! three times at 160 ms and four times at 80 ms (the paper: "replayed 1, 2, 3, or 4 times, depending on speed ...
 //! to approximately compensate for the shorter stimulus duration at higher speeds"), 500 ms apart. The pause before
 //! a repeat is 0.5 s in all four (the paper: "a brief pause"); masking is pink noise on channels 22 and 23 at
-//! -20 dB FS (the paper gives no level).
+//! -20 dB FS RMS (the paper gives no level), played as [`masking`] says.
 
 pub mod builtin;
 pub mod error;
 pub mod file;
 pub mod journal;
+pub mod masking;
 pub mod participant;
 pub mod plan;
 pub mod stats;

@@ -13,6 +13,7 @@
 //! source samples), before any device is touched: a pattern that would clip is refused and nothing is played.
 //! There is no retry and no recovery: a failed playback is reported, and the caller decides.
 
+use metaplate_core::audio::AudioConfig;
 use metaplate_core::rig::{PlayRecordError, Rig, Wiring};
 use metaplate_dsp::drift::locate_repetitions;
 use metaplate_dsp::sweep::{SweepKind, SweepSpec};
@@ -156,6 +157,55 @@ impl PatternPlayback {
         })
     }
 
+    /// Frames of the playback at the audio rate (the lead, the pattern and the marker's end, whichever is last).
+    pub fn frames(&self) -> usize {
+        self.buffers.first().map_or(0, Vec::len)
+    }
+
+    /// Output channels the playback opens: the wiring's, or more when an added output lies beyond them.
+    pub fn channels(&self) -> u32 {
+        self.buffers.len() as u32
+    }
+
+    /// Adds `samples` (at the audio rate, full scale 1.0) on output `channel` beside the pattern, from the
+    /// playback's first frame: an experiment's masking noise, for example. The playback then opens as many
+    /// channels as its highest needs, beyond the wiring's `audio_channels` if need be (the interface must have
+    /// them: its driver refuses otherwise). Samples past [`Self::frames`] are dropped; a shorter signal is followed
+    /// by silence.
+    ///
+    /// # Errors
+    /// [`RecipeError::Config`] for a channel the wiring drives (an actuator or the loopback) or one already added,
+    /// a non-finite sample, or a sample beyond full scale (it would clip).
+    pub fn add_output(&mut self, channel: u32, samples: &[f64]) -> Result<(), RecipeError> {
+        let w = &self.wiring;
+        if channel == w.loopback_channel || w.actuator_channels.contains(&channel) {
+            return Err(RecipeError::Config(format!(
+                "audio channel {channel} drives an actuator or the loopback: an added output needs a channel of its own"
+            )));
+        }
+        if let Some(k) = samples.iter().position(|v| !v.is_finite()) {
+            return Err(RecipeError::Config(format!(
+                "the output for channel {channel} holds a non-finite sample at {k}"
+            )));
+        }
+        if let Some(k) = samples.iter().position(|v| v.abs() > 1.0) {
+            return Err(RecipeError::Config(format!(
+                "the output for channel {channel} exceeds full scale at sample {k} ({}): it would clip",
+                samples[k]
+            )));
+        }
+        let frames = self.frames();
+        let index = channel as usize;
+        if index >= self.buffers.len() {
+            self.buffers.resize(index + 1, vec![0.0; frames]);
+        } else if self.buffers[index].iter().any(|&v| v != 0.0) {
+            return Err(RecipeError::Config(format!("audio channel {channel} already has an output")));
+        }
+        let n = samples.len().min(frames);
+        self.buffers[index][..n].copy_from_slice(&samples[..n]);
+        Ok(())
+    }
+
     /// Headroom left at the playback's peak, dB (`None` for a silent pattern).
     pub fn clip_margin_db(&self) -> Option<f64> {
         (self.peak_fs > 0.0).then(|| -20.0 * self.peak_fs.log10())
@@ -174,7 +224,8 @@ impl PatternPlayback {
             return Err(RecipeError::Config("the rig is not wired as the pattern was prepared for".into()));
         }
         rig.daq.configure(&wiring.daq_config(BLOCK_LEN_SAMPLES))?;
-        rig.audio.configure(&wiring.audio_config())?;
+        // As many channels as the buffers hold: the wiring's, and any added output beyond them.
+        rig.audio.configure(&AudioConfig { channels: self.channels(), ..wiring.audio_config() })?;
         // The marker and the latency the recording must cover; the rest of the pattern plays on unrecorded.
         let record_samples = ((LEAD_S + MARKER_S + MAX_LATENCY_S) * self.daq_rate_hz).ceil() as usize;
         let recording = rig.play_and_record(&self.buffers, record_samples).map_err(|e| match e {
@@ -232,6 +283,34 @@ mod tests {
         assert!((p.duration_s - 0.1).abs() < 1e-12);
         let margin = p.clip_margin_db().unwrap();
         assert!((margin - 20.0 * (1.0 / p.peak_fs).log10()).abs() < 1e-12 && margin > 5.0);
+    }
+
+    #[test]
+    fn an_added_output_widens_the_playback_and_bad_ones_are_refused() {
+        let mut p = PatternPlayback::new(&wiring(), &drives(), &[1, 0], 24e3, 0.5).unwrap();
+        let frames = p.frames();
+        let before = p.buffers.clone();
+        // A masker on channels 6 and 7, beyond the wiring's 4: the playback opens 8; one longer than the
+        // playback is cut, one shorter followed by silence.
+        p.add_output(6, &vec![0.25; frames + 10]).unwrap();
+        p.add_output(7, &[-0.5; 3]).unwrap();
+        assert_eq!(p.buffers.len(), 8);
+        assert!(p.buffers.iter().all(|b| b.len() == frames));
+        assert_eq!(p.buffers[..4], before[..]);
+        assert!(p.buffers[4..6].iter().flatten().all(|&v| v == 0.0));
+        assert!(p.buffers[6].iter().all(|&v| v == 0.25));
+        assert_eq!(p.buffers[7][..4], [-0.5, -0.5, -0.5, 0.0]);
+        for (channel, samples, needle) in [
+            (2, vec![0.1], "drives an actuator or the loopback"),
+            (0, vec![0.1], "drives an actuator or the loopback"),
+            (6, vec![0.1], "already has an output"),
+            (5, vec![0.1, f64::NAN], "non-finite sample at 1"),
+            (5, vec![0.1, 1.5], "would clip"),
+        ] {
+            let err = p.add_output(channel, &samples).unwrap_err();
+            assert!(err.to_string().contains(needle), "{err}");
+        }
+        assert_eq!(p.buffers.len(), 8);
     }
 
     #[test]

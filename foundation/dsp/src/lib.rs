@@ -3,7 +3,8 @@
 //! What every recipe stands on: swept-sine excitations ([`sweep`]), deconvolution of a recording by its excitation or
 //! by the recorded loopback reference ([`deconv`]), coherent averaging of repetitions with clock-drift correction
 //! ([`average`], [`drift`]), Kirkeby inverse filters that flatten the actuators ([`kirkeby`], refined over a smoothed band by [`equalise`]), and the windows,
-//! band limits and band-limited impulses they share ([`window`], [`band`], [`impulse`]).
+//! band limits and band-limited impulses they share ([`window`], [`band`], [`impulse`]), and pink masking noise
+//! ([`noise`]).
 //!
 //! Every public routine checks its input: an empty signal, a NaN or infinity, or a parameter outside the routine's
 //! stated valid range is a [`DspError`], never a panic and never a NaN in the result.
@@ -21,6 +22,7 @@ pub mod fft;
 pub mod impulse;
 pub mod kirkeby;
 pub mod lstsq;
+pub mod noise;
 pub mod pipeline;
 pub mod resample;
 pub mod smooth;
