@@ -15,7 +15,9 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use metaplate_control::target::Waveform;
-use metaplate_experiment::builtin;
+use metaplate_experiment::file::PixelWaveforms;
+use metaplate_experiment::{Experiment, Stimulus, builtin};
+use metaplate_figures::{PixelRole, PixelTrace, StimulusPanel};
 use metaplate_recipes::drive::DRIVE_PEAK_FS;
 use metaplate_recipes::recorded_wiring;
 use metaplate_store::Dataset;
@@ -51,14 +53,27 @@ pub struct StimuliArgs {
     /// (`null_max_mm_s` within reach).
     #[arg(long)]
     json: bool,
+    /// Also write, per experiment, `DIR/<experiment>-stimuli.png` and `.svg`: each stimulus's predicted velocity at
+    /// its pixels over time (targets in colour, nulls grey, others a second colour), as the paper's Figs. S8 to S11.
+    #[arg(long, value_name = "DIR")]
+    figures: Option<PathBuf>,
 }
 
 /// What a pixel does in a stimulus.
-fn role(target: bool, waveform: &Waveform) -> &'static str {
+fn role(target: bool, waveform: &Waveform) -> PixelRole {
     match (target, waveform.is_null()) {
-        (true, _) => "target",
-        (false, true) => "null",
-        (false, false) => "other",
+        (true, _) => PixelRole::Target,
+        (false, true) => PixelRole::Null,
+        (false, false) => PixelRole::Other,
+    }
+}
+
+/// A role's name in the report.
+fn role_name(role: PixelRole) -> &'static str {
+    match role {
+        PixelRole::Target => "target",
+        PixelRole::Null => "null",
+        PixelRole::Other => "other",
     }
 }
 
@@ -78,6 +93,7 @@ pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
         let experiment = builtin::resolve(name)?;
         let seed = args.seed.unwrap_or(experiment.order.seed);
         let mut stimuli = Vec::new();
+        let mut panels = Vec::new();
         for stimulus in &experiment.stimuli {
             let prepared = prepare_stimulus(&dataset, &drive, &experiment, stimulus, seed, &wiring, false)
                 .with_context(|| format!("`{}`: rendering the stimulus `{}`", experiment.name, stimulus.id))?;
@@ -85,6 +101,9 @@ pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
             // The field within a fingertip's reach of each pixel, as a multiple of the field at its point.
             let rendered = &prepared.pattern.rendered;
             let at_point = rendered.field_at_pixels()?;
+            if args.figures.is_some() {
+                panels.push(stimulus_panel(&dataset, &experiment, stimulus, &waveforms, &at_point, args.level));
+            }
             let within = rendered.peaks_within(&dataset.manifest().meta.grid, args.fingertip_radius_m)?;
             let pixels: Vec<(String, &'static str, f64, f64)> = waveforms
                 .iter()
@@ -94,7 +113,12 @@ pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
                     let point_peak = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
                     let reach = if point_peak > 0.0 { near / point_peak } else { 1.0 };
                     let name = experiment.pixels[pw.pixel].name.clone();
-                    (name, role(pw.target, &pw.waveform), p.predicted_peak_mm_s, p.predicted_peak_mm_s * reach)
+                    (
+                        name,
+                        role_name(role(pw.target, &pw.waveform)),
+                        p.predicted_peak_mm_s,
+                        p.predicted_peak_mm_s * reach,
+                    )
                 })
                 .collect();
             // Targets at their point (the focus); nulls over the fingertip (what the finger beside the focus feels).
@@ -114,6 +138,11 @@ pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
                 "suppression_db": suppression_db,
             }));
         }
+        if let Some(dir) = &args.figures {
+            let title = format!("{}: predicted velocity at the pixels, level {}", experiment.name, args.level);
+            let written = metaplate_figures::stimuli(dir, &format!("{}-stimuli", experiment.name), &title, &panels)?;
+            eprintln!("wrote {}", written.png.display());
+        }
         experiments.push(json!({"name": experiment.name, "stimuli": stimuli}));
     }
     let document = json!({"dataset": args.data, "level": args.level, "experiments": experiments});
@@ -123,6 +152,33 @@ pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
         print_table(&document);
     }
     Ok(())
+}
+
+/// A stimulus's panel of the stimuli figure: each pixel's predicted velocity at `level` in mm/s (the rows of
+/// `at_point`, in the waveforms' order), from 20 ms before the onset to 50 ms after the stimulus ends.
+fn stimulus_panel(
+    dataset: &Dataset,
+    experiment: &Experiment,
+    stimulus: &Stimulus,
+    waveforms: &[PixelWaveforms],
+    at_point: &[Vec<f64>],
+    level: f64,
+) -> StimulusPanel {
+    let fs = dataset.sample_rate_hz();
+    // `experiment run` delays every stimulus by the scan's impulse-response length (see `prepare_stimulus`).
+    let onset = dataset.ir_len();
+    let from = onset.saturating_sub((0.020 * fs).round() as usize);
+    let to = onset + ((stimulus.duration_s() + 0.050) * fs).round() as usize;
+    let traces = waveforms
+        .iter()
+        .zip(at_point)
+        .map(|(pw, v)| PixelTrace {
+            label: experiment.pixels[pw.pixel].name.clone(),
+            role: role(pw.target, &pw.waveform),
+            velocity_mm_s: v[from.min(v.len())..to.min(v.len())].iter().map(|x| 1e3 * level * x).collect(),
+        })
+        .collect();
+    StimulusPanel { title: stimulus.id.clone(), sample_rate_hz: fs, start_s: (from as f64 - onset as f64) / fs, traces }
 }
 
 fn print_table(document: &Value) {

@@ -376,6 +376,15 @@ fn the_stimuli_report_gives_each_pixels_predicted_peak_and_the_suppression() {
             assert_eq!(p["within_fingertip_mm_s"], p["predicted_peak_mm_s"], "{p}");
         }
     }
+    // The figure of the stimuli at their pixels (Figs. S8 to S11), one per experiment.
+    let figures = fresh("stimuli-figures");
+    let mut with_figures = args.to_vec();
+    with_figures.extend(["--figures", figures.to_str().unwrap()]);
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate")).args(&with_figures).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for ext in ["png", "svg"] {
+        assert!(figures.join(format!("three-points-stimuli.{ext}")).is_file());
+    }
     // A reach of 9 cm takes in the neighbouring points, where nothing is nulled: the nulls' figures grow.
     let mut wide = args.to_vec();
     wide.extend(["--fingertip-radius-m", "0.09"]);

@@ -1,6 +1,7 @@
 //! Figures of the paper's analyses, each written as PNG and SVG: wavelength against frequency, focus snapshots (and
 //! the focusing as an animated PNG), the virtual-pixel-area map, POD energy, singular-value energy and condition
-//! numbers (plus the driven response); behavioural accuracy per participant with the chance line.
+//! numbers (plus the driven response); behavioural accuracy per participant with the chance line, and an
+//! experiment's stimuli as predicted at its pixels.
 //!
 //! Text is set in DejaVu Sans, bundled in the crate (`fonts/`, Bitstream Vera licence) and read by ab_glyph: no
 //! system font, fontconfig or font-kit is ever consulted, so figures look the same on every machine and in CI.
@@ -17,6 +18,7 @@ mod grid_svg;
 mod maps;
 mod plots;
 mod render;
+mod stimuli;
 mod tradeoff;
 
 pub use accuracy::{AccuracyBar, accuracy};
@@ -27,4 +29,5 @@ pub use plots::{
     singular_value_energy, wavelength,
 };
 pub use render::{FigureError, Written};
+pub use stimuli::{PixelRole, PixelTrace, StimulusPanel, stimuli};
 pub use tradeoff::{TradeoffPoint, tradeoff};
