@@ -404,3 +404,49 @@ fn the_stimuli_report_gives_each_pixels_predicted_peak_and_the_suppression() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("snap to the same measured point"));
 }
+
+#[test]
+fn the_stimuli_judged_on_the_ground_truth_match_the_scans_prediction_at_the_targets() {
+    let (cal, _, _, _) = fixtures();
+    let scan = common::fingertip_scan();
+    let args = |truth: &str| {
+        [
+            "experiment",
+            "stimuli",
+            "pixel-identification",
+            "--data",
+            scan.to_str().unwrap(),
+            "--calibration",
+            cal.to_str().unwrap(),
+            "--truth",
+            truth,
+            "--json",
+            "--cache-dir",
+            cache_dir().to_str().unwrap(),
+        ]
+        .map(str::to_owned)
+    };
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args("metamaterial")).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let doc: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let stimuli = doc["experiments"][0]["stimuli"].as_array().unwrap();
+    assert_eq!(stimuli.len(), 5);
+    for s in stimuli {
+        let (predicted, truth) = (s["target_min_mm_s"].as_f64().unwrap(), s["true_target_min_mm_s"].as_f64().unwrap());
+        // A quick scan's Green's functions lie about -35 dB (2 %) from the plate's truth (full grid, seed 11, at the
+        // fingertips: median -34.4 dB): the focus, a sum of eight in-phase contributions, is met to that.
+        assert!((truth / predicted - 1.0).abs() < 0.05, "{s}");
+        // A null is a cancellation of eight contributions, each known to about 2 %: it holds to some 30 to 45 dB
+        // on the plate, never much deeper than predicted.
+        let true_db = s["true_suppression_at_points_db"].as_f64().unwrap();
+        assert!(true_db > 25.0 && true_db <= s["suppression_at_points_db"].as_f64().unwrap() + 3.0, "{s}");
+        for p in s["pixels"].as_array().unwrap() {
+            assert!(p["true_peak_mm_s"].as_f64().unwrap().is_finite(), "{p}");
+        }
+    }
+    // Another plate's truth is refused, naming the scan's.
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args("homogeneous")).output().unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("the scan was made on the scene `metamaterial`"), "{stderr}");
+}

@@ -91,6 +91,7 @@ mod accuracy;
 mod chain;
 mod links;
 pub mod session;
+mod truth;
 
 pub use accuracy::ERROR_BAND_HZ;
 

@@ -175,3 +175,45 @@ fn e_a_3_s_playback_takes_3_s_of_virtual_time_only() {
     // A debug build on a loaded 2-core machine: far below the 3 s a real playback takes.
     assert!(wall_s < 2.0, "{wall_s} s of wall time");
 }
+
+#[test]
+fn the_true_velocity_of_a_drive_is_its_convolution_with_the_true_response() {
+    let scene = common::scene(vec![], true);
+    let lab = common::lab(&scene, None);
+    let point = common::point(&scene);
+    let fs = scene.daq.sample_rate_hz;
+    // An impulse on actuator 2: the velocity is actuator 2's true response, whose spectrum `true_response` gives
+    // by another route (a direct DTFT of the impulse response, the coil's gain multiplied in). The velocity is cut
+    // after the plate's impulse-response length, where the coil (an IIR filter) still rings a little: 1e-4
+    // (-80 dB) of the response.
+    let mut impulse = vec![0.0; 64];
+    impulse[0] = 1.0;
+    let v = lab.true_velocity(point, &[2], &[impulse.clone()], fs).unwrap();
+    let freqs = [100.0, 250.0, 400.0];
+    let truth = lab.true_response(point, 2, &freqs).unwrap();
+    for (f, t) in freqs.iter().zip(&truth) {
+        let dtft: num_complex::Complex64 = v
+            .iter()
+            .enumerate()
+            .map(|(n, &x)| x * num_complex::Complex64::from_polar(1.0, -2.0 * std::f64::consts::PI * f * n as f64 / fs))
+            .sum();
+        assert!((dtft - t).norm() < 1e-4 * t.norm(), "{f} Hz: {dtft} against {t}");
+    }
+    // Linear: two actuators' drives give the sum of each alone.
+    let burst: Vec<f64> = (0..64).map(|n| (n as f64 * 0.3).sin() * 0.5).collect();
+    let both = lab.true_velocity(point, &[2, 5], &[impulse.clone(), burst.clone()], fs).unwrap();
+    let alone = lab.true_velocity(point, &[5], &[burst], fs).unwrap();
+    let worst = both.iter().zip(v.iter().zip(&alone)).map(|(b, (a, c))| (b - a - c).abs()).fold(0.0, f64::max);
+    let peak = both.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(worst < 1e-12 * peak, "{worst} against {peak}");
+    // Refused by name: another rate, an unprepared point, mismatched drives, a NaN.
+    for (point, actuators, drives, rate, needle) in [
+        (point, vec![2], vec![impulse.clone()], fs / 2.0, "Green's functions are at"),
+        (scene.grid.len() - 1, vec![2], vec![impulse.clone()], fs, "grid point"),
+        (point, vec![2, 5], vec![impulse.clone()], fs, "2 actuators"),
+        (point, vec![2], vec![vec![f64::NAN]], fs, "non-finite"),
+    ] {
+        let err = lab.true_velocity(point, &actuators, &drives, rate).unwrap_err();
+        assert!(err.to_string().contains(needle), "{err}");
+    }
+}
