@@ -45,10 +45,12 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     if !common.json {
         for r in &results {
             eprintln!(
-                "actuator {}: {} (flat within {:.2} dB, {} attempt(s), boost {:.1} dB)",
+                "actuator {}: {} (flat within {:.2} dB; {:.2} dB on pyfar's standard smoothing; {} attempt(s), boost \
+                 {:.1} dB)",
                 r.actuator,
                 r.status.as_str(),
                 r.flatness.deviation_db(),
+                r.standard_flatness.deviation_db(),
                 r.attempts,
                 r.filter.max_boost_db
             );

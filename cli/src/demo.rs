@@ -251,6 +251,7 @@ fn calibration_json(dir: &Path, calibrated: &[ActuatorCalibration]) -> Value {
             "status": c.status.as_str(),
             "attempts": c.attempts,
             "flatness_deviation_db": c.flatness.deviation_db(),
+            "standard_flatness_deviation_db": c.standard_flatness.deviation_db(),
             "max_boost_db": c.filter.max_boost_db,
         })).collect::<Vec<_>>(),
     })

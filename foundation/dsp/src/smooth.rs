@@ -220,6 +220,135 @@ pub fn minimum_phase_response(
     Ok(out)
 }
 
+/// Fractional-octave smoothing of a magnitude response as pyfar's `smooth_fractional_octave` does it (its default,
+/// `mode="magnitude_zerophase"`, `window="boxcar"`; Tylka et al. 2017, method 2), the smoothing others report
+/// flatness with: `magnitude` (bins `0..N` of a real DFT, `|H|`) is interpolated by a not-a-knot cubic spline onto
+/// `N` logarithmically spaced points (bin `k` at `N^(k / (N - 1)) - 1`), averaged by a moving mean of
+/// `n_window = 2 floor(1 / (2 fraction dn)) + 1` of them (`dn = log2(N^(1/(N-1)))` octaves apart; the edges
+/// repeat the end values), and interpolated back. Returns the smoothed magnitude and `n_window`.
+///
+/// How it differs from [`fractional_octave_power`]: it averages the magnitude, not the power (a narrow peak counts
+/// less, a narrow notch more), with a rectangular window (a mode entering or leaving the window steps the level),
+/// over the whole spectrum (a roll-off outside a band pulls the level inside it near the edge), and through two
+/// interpolations, the first of which samples the high octaves sparsely (points about `ln N` bins apart at the top).
+///
+/// Valid range: `magnitude` of at least 4 finite values; `fraction` finite and > 0, small enough that the window
+/// holds more than one point (`n_window > 1`). Agrees with pyfar 0.8.1 to 3e-15 of the peak
+/// (`tests/pyfar_crosscheck.rs`).
+///
+/// # Errors
+/// [`DspError::Empty`] for fewer than 4 values, [`DspError::NonFinite`] for a non-finite one,
+/// [`DspError::InvalidParameter`] naming `fraction` when it is out of range or too narrow for the resolution.
+pub fn fractional_octave_standard(magnitude: &[f64], fraction: f64) -> Result<(Vec<f64>, usize), DspError> {
+    let n = magnitude.len();
+    if n < 4 {
+        return Err(DspError::Empty { input: "magnitude (at least 4 bins)" });
+    }
+    check_signal("magnitude", magnitude)?;
+    if !(fraction.is_finite() && fraction > 0.0) {
+        return Err(DspError::InvalidParameter {
+            name: "fraction",
+            reason: format!("must be finite and > 0, got {fraction}"),
+        });
+    }
+    let nf = n as f64;
+    let lin: Vec<f64> = (1..=n).map(|k| k as f64).collect();
+    let log: Vec<f64> = (0..n).map(|k| nf.powf(k as f64 / (nf - 1.0))).collect();
+    let dn = log[1].log2();
+    let n_window = 2 * (1.0 / (fraction * dn * 2.0)).floor() as usize + 1;
+    if n_window <= 1 {
+        return Err(DspError::InvalidParameter {
+            name: "fraction",
+            reason: format!(
+                "1/{fraction} octave is below the resolution of {n} bins: use a longer response or a smaller fraction"
+            ),
+        });
+    }
+    let on_log = NotAKnotSpline::new(&lin, magnitude).eval_sorted(&log);
+    let half = n_window / 2;
+    // Moving mean with the end values repeated (scipy's `mode="nearest"`), by a running sum.
+    let at = |i: isize| on_log[i.clamp(0, n as isize - 1) as usize];
+    let mut sum: f64 = (-(half as isize)..=half as isize).map(at).sum();
+    let mut averaged = Vec::with_capacity(n);
+    for i in 0..n as isize {
+        averaged.push(sum / n_window as f64);
+        sum += at(i + half as isize + 1) - at(i - half as isize);
+    }
+    let back = NotAKnotSpline::new(&log, &averaged).eval_sorted(&lin);
+    check_result("smoothed magnitude", &back)?;
+    Ok((back, n_window))
+}
+
+/// The cubic spline through `(x, y)` with not-a-knot ends (the third derivative continuous at the second and the
+/// last-but-one knot), as scipy's `interp1d(kind="cubic")` builds it. Needs at least 4 knots, `x` strictly
+/// increasing.
+struct NotAKnotSpline<'a> {
+    x: &'a [f64],
+    y: &'a [f64],
+    /// Second derivatives at the knots.
+    m: Vec<f64>,
+}
+
+impl<'a> NotAKnotSpline<'a> {
+    fn new(x: &'a [f64], y: &'a [f64]) -> Self {
+        let n = x.len();
+        let h: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+        // Equations for M_1 ..= M_{n-2}: h_{i-1} M_{i-1} + 2 (h_{i-1} + h_i) M_i + h_i M_{i+1} = r_i, with M_0 and
+        // M_{n-1} eliminated by the not-a-knot conditions: a tridiagonal system, solved by Thomas' algorithm.
+        let k = n - 2;
+        let (mut sub, mut diag, mut sup, mut rhs) = (vec![0.0; k], vec![0.0; k], vec![0.0; k], vec![0.0; k]);
+        for j in 0..k {
+            let i = j + 1;
+            sub[j] = h[i - 1];
+            diag[j] = 2.0 * (h[i - 1] + h[i]);
+            sup[j] = h[i];
+            rhs[j] = 6.0 * ((y[i + 1] - y[i]) / h[i] - (y[i] - y[i - 1]) / h[i - 1]);
+        }
+        let (h0, h1) = (h[0], h[1]);
+        let (ha, hb) = (h[n - 3], h[n - 2]);
+        // At least 4 knots: k >= 2, so the first and last rows are distinct.
+        diag[0] = (h0 + h1) * (h0 + 2.0 * h1) / h1;
+        sup[0] = (h1 * h1 - h0 * h0) / h1;
+        sub[k - 1] = (ha * ha - hb * hb) / ha;
+        diag[k - 1] = (ha + hb) * (2.0 * ha + hb) / ha;
+        for j in 1..k {
+            let w = sub[j] / diag[j - 1];
+            diag[j] -= w * sup[j - 1];
+            rhs[j] -= w * rhs[j - 1];
+        }
+        let mut inner = vec![0.0; k];
+        inner[k - 1] = rhs[k - 1] / diag[k - 1];
+        for j in (0..k - 1).rev() {
+            inner[j] = (rhs[j] - sup[j] * inner[j + 1]) / diag[j];
+        }
+        let mut m = Vec::with_capacity(n);
+        m.push(((h0 + h1) * inner[0] - h0 * inner[1]) / h1);
+        m.extend_from_slice(&inner);
+        m.push(((ha + hb) * inner[k - 1] - hb * inner[k - 2]) / ha);
+        Self { x, y, m }
+    }
+
+    /// The spline at `xs` (ascending, within the knots' range; outside it the end pieces are extended).
+    fn eval_sorted(&self, xs: &[f64]) -> Vec<f64> {
+        let (x, y, m) = (self.x, self.y, &self.m);
+        let last = x.len() - 2;
+        let mut i = 0;
+        xs.iter()
+            .map(|&t| {
+                while i < last && t > x[i + 1] {
+                    i += 1;
+                }
+                let h = x[i + 1] - x[i];
+                let (a, b) = (x[i + 1] - t, t - x[i]);
+                m[i] * a * a * a / (6.0 * h)
+                    + m[i + 1] * b * b * b / (6.0 * h)
+                    + (y[i] / h - m[i] * h / 6.0) * a
+                    + (y[i + 1] / h - m[i + 1] * h / 6.0) * b
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]

@@ -153,8 +153,11 @@ pub struct ActuatorCalibration {
     pub actuator: usize,
     /// The inverse filter.
     pub filter: KirkebyFilter,
-    /// Flatness of the verification response over the check band.
+    /// Flatness of the verification response over the check band, on the calibration's own smoothing (the
+    /// verdict: [`crate::quality::smoothed_flatness`]).
     pub flatness: Flatness,
+    /// The same on pyfar's standard smoothing ([`crate::quality::standard_flatness`]), as others would report it.
+    pub standard_flatness: Flatness,
     /// Attempts made (1 when the first passed).
     pub attempts: u32,
     /// `Valid` when flat within the limit, `Failed` otherwise.

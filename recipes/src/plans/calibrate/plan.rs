@@ -227,7 +227,7 @@ impl Plan for CalibrationPlan<'_> {
                 self.current = Some(current);
                 Ok(Verdict::Continue { retry: None })
             }
-            Processed::Verified { actuator, verification, flatness } => {
+            Processed::Verified { actuator, verification, flatness, standard } => {
                 let Some((response, filter)) = current.designed.take() else {
                     return Err(RecipeError::Internal(format!("actuator {actuator}: verified without a filter")));
                 };
@@ -247,7 +247,8 @@ impl Plan for CalibrationPlan<'_> {
                     return Ok(Verdict::Continue { retry: Some((actuator, attempts, "not flat enough".into())) });
                 }
                 let status = if pass { Status::Valid } else { Status::Failed };
-                let calibration = ActuatorCalibration { actuator, filter, flatness, attempts, status };
+                let calibration =
+                    ActuatorCalibration { actuator, filter, flatness, standard_flatness: standard, attempts, status };
                 // Every repeat counts: design attempts after the first and repeated acquisitions.
                 let retries = current.attempt + current.acquisition_retries;
                 let records = self.records(&calibration, retries, &response, &verification)?;
@@ -274,7 +275,7 @@ mod tests {
 
     fn verified(actuator: usize, deviation_db: f64) -> Result<Processed, RecipeError> {
         let flatness = Flatness { median_db: 0.0, min_db: -deviation_db, max_db: deviation_db };
-        Ok(Processed::Verified { actuator, verification: vec![0.5; 4], flatness })
+        Ok(Processed::Verified { actuator, verification: vec![0.5; 4], flatness, standard: flatness })
     }
 
     fn plan<'a>(sites: &'a [(f64, f64)], cfg: &'a CalibrationConfig) -> CalibrationPlan<'a> {

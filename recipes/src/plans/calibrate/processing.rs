@@ -9,7 +9,7 @@ use metaplate_dsp::stats::median;
 use crate::engine::plan::Processor;
 use crate::engine::session::Acquisition;
 use crate::error::RecipeError;
-use crate::quality::{Flatness, smoothed_flatness};
+use crate::quality::{Flatness, smoothed_flatness, standard_flatness};
 
 /// Which measurement of an attempt a recording is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -32,7 +32,8 @@ pub(super) enum Processed {
     /// The measured response (m/s per full scale) and the filter designed from it.
     Designed { actuator: usize, response: Vec<f64>, filter: KirkebyFilter, predicted_db: f64, designs: usize },
     /// The verification response (m/s per full scale) and its flatness over the check band.
-    Verified { actuator: usize, verification: Vec<f64>, flatness: Flatness },
+    /// `flatness` on the project's smoothing (the verdict), `standard` on pyfar's (reported).
+    Verified { actuator: usize, verification: Vec<f64>, flatness: Flatness, standard: Flatness },
 }
 
 /// The calibration's processing at the DAQ rate: deconvolution, the equaliser's design and the flatness judged over
@@ -68,7 +69,8 @@ impl Processor for CalibrationProcessor {
             }
             Phase::Verification => {
                 let flatness = smoothed_flatness(&response, fs, band_hz, self.equaliser.fraction)?;
-                Ok(Processed::Verified { actuator, verification: response, flatness })
+                let standard = standard_flatness(&response, fs, band_hz, self.equaliser.fraction)?;
+                Ok(Processed::Verified { actuator, verification: response, flatness, standard })
             }
         }
     }
