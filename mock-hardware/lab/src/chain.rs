@@ -43,6 +43,8 @@ pub(crate) struct ChainParams {
     pub daq_ppm: f64,
     pub noise_rms_m_s: f64,
     pub dropout_probability: f64,
+    /// Whether the vibrometer's output clips at its range's full scale (the scene's `daq.clipping`).
+    pub clipping: bool,
     /// Top of the Green's functions' band, Hz.
     pub band_hi_hz: f64,
 }
@@ -388,8 +390,9 @@ impl LabState {
             }
         }
         let volts_per_m_s = 1.0 / range.m_per_s_per_v();
+        let clip = if self.params.clipping { full_scale } else { f64::INFINITY };
         for v in out.iter_mut() {
-            *v = v.clamp(-full_scale, full_scale) * volts_per_m_s;
+            *v = v.clamp(-clip, clip) * volts_per_m_s;
         }
         Ok(())
     }

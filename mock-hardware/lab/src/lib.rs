@@ -33,7 +33,9 @@
 //!    expected to pick; the lab uses the range actually selected.)
 //! 5. The DAQ samples input 0 (LDV output) and input 1 (loopback channel × `loopback_volts_per_full_scale`) at its
 //!    true rate `fs_d = 24 kHz * (1 + daq ppm)` from the moment it was started, digitised to 16 bits with
-//!    clipping by the mock DAQ, and streamed through its bulk protocol to the real driver.
+//!    clipping by the mock DAQ, and streamed through its bulk protocol to the real driver. A scene with another
+//!    `daq.bits` (0: ideal) or `daq.clipping = false` gets an in-process DAQ instead (`direct_daq`: the same
+//!    samples, digitised as the scene says, no USB link and none of its faults), for error budgets.
 //!
 //! # Clocks
 //! Everything runs on one [`VirtualClock`] (true time). The DAQ's sample `n` is taken at `t0 + n / fs_d`, `t0`
@@ -89,6 +91,7 @@
 
 mod accuracy;
 mod chain;
+mod direct_daq;
 mod links;
 pub mod session;
 
@@ -112,6 +115,10 @@ use metaplate_plate::{GreensFunctions, GreensRequest, ModelOptions, greens_funct
 use num_complex::Complex64;
 
 pub use chain::LabStats;
+
+/// Resolution of the mock DAQ's wire protocol, bits: a scene's DAQ of this resolution, clipping, records through
+/// it; any other is served in process (see the `daq` docs of the scene).
+const PROTOCOL_BITS: u32 = 16;
 
 /// Why the lab could not be built or used.
 #[derive(Debug, thiserror::Error)]
@@ -332,6 +339,7 @@ impl MockLab {
             daq_ppm: scene.daq.clock_offset_ppm,
             noise_rms_m_s: scene.ldv.noise_rms_m_s,
             dropout_probability: scene.ldv.dropout_probability,
+            clipping: scene.daq.clipping,
             band_hi_hz: hi,
         };
         let state = chain::LabState::new(
@@ -396,13 +404,21 @@ impl MockLab {
                 });
             }
         };
-        let source = Box::new(chain::LabSource(self.shared.clone()));
-        let device = MockDaq::new(usb6211_info("LAB-DAQ-0001"), source)
-            .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
-        let transport = MockTransport::new(device, metaplate_mock_daq::FaultSchedule::none());
-        let link = links::LabDaqLink::new(transport, Arc::clone(&self.clock), &self.windows, self.shared.clone());
-        let daq = DaqDriver::open(link, DriverSettings::default())
-            .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
+        let daq: Box<dyn metaplate_core::daq::Daq + Send> = if self.scene.daq.bits == PROTOCOL_BITS
+            && self.scene.daq.clipping
+        {
+            let source = Box::new(chain::LabSource(self.shared.clone()));
+            let device = MockDaq::new(usb6211_info("LAB-DAQ-0001"), source)
+                .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
+            let transport = MockTransport::new(device, metaplate_mock_daq::FaultSchedule::none());
+            let link = links::LabDaqLink::new(transport, Arc::clone(&self.clock), &self.windows, self.shared.clone());
+            Box::new(
+                DaqDriver::open(link, DriverSettings::default())
+                    .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?,
+            )
+        } else {
+            Box::new(direct_daq::DirectDaq::new(self.shared.clone(), self.scene.daq.bits, self.scene.daq.clipping))
+        };
         // The interface runs at its own clock setting, which the setup may have left at another rate than the rig
         // asks for.
         let mut audio = self.scene.audio;
@@ -411,13 +427,7 @@ impl MockLab {
         }
         let pcm = MockPcm::new(&audio, Arc::clone(&self.clock), &self.scene.faults)
             .with_observer(Arc::new(self.shared.clone()));
-        Ok(Rig {
-            vibrometer,
-            daq: Box::new(daq),
-            audio: Box::new(AudioDriver::new(pcm)),
-            clock,
-            wiring: self.wiring.clone(),
-        })
+        Ok(Rig { vibrometer, daq, audio: Box::new(AudioDriver::new(pcm)), clock, wiring: self.wiring.clone() })
     }
 
     /// The scene in force (with the seed override applied).

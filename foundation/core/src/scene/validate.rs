@@ -255,8 +255,8 @@ impl Scene {
         positive("ldv.max_velocity_m_s", l.max_velocity_m_s, "m/s")?;
 
         let d = &self.daq;
-        if !(1..=32).contains(&d.bits) {
-            return problem("daq.bits", format!("must lie in 1..=32, got {}", d.bits));
+        if d.bits > 32 {
+            return problem("daq.bits", format!("must be 0 (ideal) or lie in 1..=32, got {}", d.bits));
         }
         positive("daq.range_v", d.range_v, "V")?;
         positive("daq.sample_rate_hz", d.sample_rate_hz, "Hz")?;
