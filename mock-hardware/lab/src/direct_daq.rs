@@ -32,7 +32,7 @@ impl DirectDaq {
 
     /// `volts` digitised on a channel of range `range_v`: rounded to the nearest of `2^bits` codes spanning
     /// `-range_v ..` in steps of `range_v / 2^(bits - 1)` (the wire protocol's rule at 16 bits) unless `bits` is 0,
-    /// held at the rails when clipping is on. Returns the value and whether it clipped.
+    /// held at the rails when clipping is on. Returns the value and whether it sits on a rail (clipping on).
     fn digitise(&self, volts: f64, range_v: f64) -> (f64, bool) {
         let (value, top) = if self.bits == 0 {
             (volts, range_v)
@@ -40,11 +40,10 @@ impl DirectDaq {
             let step = range_v / f64::from(self.bits - 1).exp2();
             ((volts / step).round() * step, range_v - step)
         };
-        if self.clipping && !(-range_v..=top).contains(&value) {
-            (value.clamp(-range_v, top), true)
-        } else {
-            (value, false)
-        }
+        // On a rail or beyond it counts as clipped, as a sample on an extreme code does (the vibrometer's own
+        // clipping lands exactly on the rail).
+        let on_rail = value <= -range_v || value >= top;
+        if self.clipping { (value.clamp(-range_v, top), on_rail) } else { (value, false) }
     }
 }
 

@@ -90,12 +90,13 @@
 //!   is seen as a timeout (see `PtyServer`).
 
 mod accuracy;
+pub mod budget;
 mod chain;
 mod direct_daq;
 mod links;
 pub mod session;
 
-pub use accuracy::ERROR_BAND_HZ;
+pub use accuracy::{ERROR_BAND_HZ, time_zero_first};
 
 use std::f64::consts::PI;
 use std::path::PathBuf;
