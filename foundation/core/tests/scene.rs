@@ -562,9 +562,10 @@ fn a_setup_table_changes_the_identity_not_the_physics() {
 fn every_imperfection_switches_off_on_the_same_plate() {
     for name in Scene::builtin_names() {
         let s = Scene::builtin(name).unwrap();
-        // The built-ins have every imperfection but faults.
+        // The built-ins have every imperfection but faults and an aiming error.
+        let absent = [Imperfection::Faults, Imperfection::AimError];
         for &i in Imperfection::all() {
-            assert_eq!(i.is_present(&s), i != Imperfection::Faults, "{name}: {i}");
+            assert_eq!(i.is_present(&s), !absent.contains(&i), "{name}: {i}");
             assert_eq!(Imperfection::by_name(i.name()), Some(i));
             let off = s.without(&[i]);
             assert!(!i.is_present(&off), "{name}: {i} is off");
@@ -585,6 +586,16 @@ fn every_imperfection_switches_off_on_the_same_plate() {
         assert!(text.contains("clipping = false") && text.contains("bits = 0"), "{text}");
         assert_eq!(Scene::from_toml_str(&text, "ideal").unwrap(), ideal);
         // The default writes no optional key (the identity pinned above is unchanged).
-        assert!(!s.to_toml_string().contains("clipping"));
+        assert!(!s.to_toml_string().contains("clipping") && !s.to_toml_string().contains("aim_error"));
+        // The aiming error reads, writes and switches off.
+        let mut aimed = s.clone();
+        aimed.ldv.aim_error_rms_m = 0.0005;
+        let text = aimed.to_toml_string();
+        assert!(text.contains("aim_error_rms_m = 0.0005"), "{text}");
+        assert_eq!(Scene::from_toml_str(&text, "aimed").unwrap(), aimed);
+        assert!(Imperfection::AimError.is_present(&aimed) && aimed.with_only(&[]).ldv.aim_error_rms_m == 0.0);
+        assert_eq!(aimed.physics_hash(), s.physics_hash());
+        let bad = text.replace("aim_error_rms_m = 0.0005", "aim_error_rms_m = 0.5");
+        assert!(Scene::from_toml_str(&bad, "bad").unwrap_err().to_string().contains("ldv.aim_error_rms_m"));
     }
 }

@@ -255,7 +255,7 @@ mod tests {
         let v = Budget::variants(&scene);
         assert_eq!(v.first().map(|(p, _)| *p), Some(BudgetPart::Floor));
         assert_eq!(v.last().map(|(p, s)| (*p, s == &scene)), Some((BudgetPart::AllOn, true)));
-        // The built-ins have every imperfection but scheduled faults.
-        assert_eq!(v.len(), Imperfection::all().len() + 1);
+        // The built-ins have every imperfection but scheduled faults and an aiming error.
+        assert_eq!(v.len(), Imperfection::all().len());
     }
 }

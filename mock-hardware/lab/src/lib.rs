@@ -75,6 +75,11 @@
 //!
 //! # Simplifications
 //! - The beam is read once per playback (at submit): moving it during a playback does not change that playback.
+//! - An aiming error (`ldv.aim_error_rms_m`) offsets the beam from each commanded point by a normal draw per point
+//!   (keyed by the seed and the point, the same at every playback there); the response at the offset spot is the
+//!   point's plus the offset times the response's slope, by differences with the neighbouring grid points (the lab
+//!   prepares them), central where both exist: first order in the offset, fine for offsets far below the 5 mm step
+//!   and the shortest wavelength.
 //! - A DAQ acquisition records only the playbacks submitted during it: the ring-down of an earlier playback (the
 //!   previous unit's last sweep) is not carried into the next acquisition, and a random dropout's low `SIG?`
 //!   reading ends when the beam moves. So what a measurement yields depends on (scene, seed, what is played where)
@@ -292,6 +297,8 @@ impl MockLab {
             points.extend((0..scene.actuators.len()).map(|k| grid_len + k));
             points
         });
+        // An aiming error needs the response's slope at each grid point: its measurable grid neighbours too.
+        let points = if scene.ldv.aim_error_rms_m > 0.0 { with_grid_neighbours(&scene, points) } else { points };
         let request = GreensRequest {
             points: points.clone(),
             actuators: (0..scene.actuators.len()).collect(),
@@ -302,6 +309,7 @@ impl MockLab {
         let greens = greens_functions(&scene, &options.model, &request, options.cache_dir.as_deref())?;
         let coils = VoiceCoil::for_scene(&scene, scene.audio.sample_rate_hz)?;
         let plate = Arc::new(chain::Plate {
+            slopes: points.iter().map(|&p| chain::Slope::at(&scene, &points, p)).collect(),
             positions_m: points.iter().map(|&p| point_position_m(&scene, p)).collect(),
             tolerance_m: scene.grid.spacing_m / 2.0,
             greens,
@@ -341,6 +349,7 @@ impl MockLab {
             noise_rms_m_s: scene.ldv.noise_rms_m_s,
             dropout_probability: scene.ldv.dropout_probability,
             clipping: scene.daq.clipping,
+            aim_error_rms_m: scene.ldv.aim_error_rms_m,
             band_hi_hz: hi,
         };
         let state = chain::LabState::new(
@@ -522,6 +531,22 @@ impl MockLab {
             })
             .collect()
     }
+}
+
+/// `points` and, after them, the measurable grid neighbours (one step along x or y) of its grid points that it
+/// lacks, in ascending order.
+fn with_grid_neighbours(scene: &Scene, mut points: Vec<usize>) -> Vec<usize> {
+    let mask = scene.grid_mask();
+    let mut extra: Vec<usize> = points
+        .iter()
+        .filter(|&&p| p < scene.grid.len())
+        .flat_map(|&p| chain::Slope::grid_neighbours(&scene.grid, p).into_iter().flatten())
+        .filter(|&q| mask[q] && !points.contains(&q))
+        .collect();
+    extra.sort_unstable();
+    extra.dedup();
+    points.extend(extra);
+    points
 }
 
 /// Where point `point` is, m: a grid point, or (from `grid.len()` on) an actuator's driving point.

@@ -129,3 +129,42 @@ fn dropouts_and_speckle_off() {
     let model = metaplate_mock_ldv::SpeckleModel::new(&s.ldv, s.seed);
     assert!((-5..5).all(|k| model.level_percent(k * 5_000, k * 3_000) == 100));
 }
+
+#[test]
+fn an_aiming_error_moves_the_spot_a_little_the_same_at_every_playback() {
+    let exact = common::scene(vec![], true).without(&[Imperfection::LdvNoise]);
+    let mut aimed = exact.clone();
+    aimed.ldv.aim_error_rms_m = 0.0005;
+    // The aimed lab prepares the test point's grid neighbours as well, for the response's slope.
+    let point = common::point(&exact);
+    let neighbours = {
+        let (ix, iy) = exact.grid.indices(point);
+        vec![
+            point,
+            exact.grid.index(ix - 1, iy),
+            exact.grid.index(ix + 1, iy),
+            exact.grid.index(ix, iy - 1),
+            exact.grid.index(ix, iy + 1),
+        ]
+    };
+    let record = |scene: &Scene| {
+        let lab = common::lab_with_points(scene, None, neighbours.clone());
+        let mut rig = lab.rig().unwrap();
+        ready(&lab, &mut rig, 0.02);
+        let sweep = common::sweep(0.5);
+        let a = play_and_record(&mut rig, 2, &sweep, &sweep, 18_000).unwrap();
+        let b = play_and_record(&mut rig, 2, &sweep, &sweep, 18_000).unwrap();
+        (a, b)
+    };
+    let (e, _) = record(&exact);
+    let (a, b) = record(&aimed);
+    assert_eq!(a.velocity_v, b.velocity_v, "one offset per point, the same at every playback");
+    let diff: f64 = a.velocity_v.iter().zip(&e.velocity_v).map(|(x, y)| (x - y).powi(2)).sum();
+    let energy: f64 = e.velocity_v.iter().map(|x| x * x).sum();
+    let rel_db = 10.0 * (diff / energy).log10();
+    // 0.5 mm against wavelengths of 5 to 10 cm on this plate: a change of a few percent, no more.
+    assert!((-60.0..-10.0).contains(&rel_db), "{rel_db} dB");
+    // Switched off, the recording is the exact one again.
+    let (off, _) = record(&aimed.without(&[Imperfection::AimError]));
+    assert_eq!(off.velocity_v, e.velocity_v);
+}

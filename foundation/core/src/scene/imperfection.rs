@@ -25,12 +25,14 @@ pub enum Imperfection {
     Nonlinearity,
     /// The voice coils' unit-to-unit gain spread: every actuator's `spread_db = 0`.
     ActuatorSpread,
+    /// The scanner's beam positioning error: `ldv.aim_error_rms_m = 0`.
+    AimError,
     /// The scene's scheduled faults (timeouts, stalls, dropout windows, underruns, disconnects): none.
     Faults,
 }
 
 /// Every imperfection, in the order of [`Imperfection::all`].
-const ALL: [Imperfection; 10] = [
+const ALL: [Imperfection; 11] = [
     Imperfection::LdvNoise,
     Imperfection::Speckle,
     Imperfection::Dropouts,
@@ -40,6 +42,7 @@ const ALL: [Imperfection; 10] = [
     Imperfection::Latency,
     Imperfection::Nonlinearity,
     Imperfection::ActuatorSpread,
+    Imperfection::AimError,
     Imperfection::Faults,
 ];
 
@@ -61,6 +64,7 @@ impl Imperfection {
             Self::Latency => "latency",
             Self::Nonlinearity => "nonlinearity",
             Self::ActuatorSpread => "actuator-spread",
+            Self::AimError => "aim-error",
             Self::Faults => "faults",
         }
     }
@@ -93,6 +97,7 @@ impl Imperfection {
             Self::Latency => scene.audio.latency_s = 0.0,
             Self::Nonlinearity => scene.actuators.iter_mut().for_each(|a| a.voice_coil.nonlinearity = 0.0),
             Self::ActuatorSpread => scene.actuators.iter_mut().for_each(|a| a.voice_coil.spread_db = 0.0),
+            Self::AimError => scene.ldv.aim_error_rms_m = 0.0,
             Self::Faults => scene.faults.clear(),
         }
     }

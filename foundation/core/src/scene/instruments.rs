@@ -5,7 +5,8 @@ use serde::{Deserialize, Serialize};
 /// The laser Doppler vibrometer's imperfections.
 ///
 /// Valid range (checked by [`crate::scene::Scene::validate`]): finite `noise_rms_m_s >= 0`,
-/// `0 < speckle_mean_level <= 1`, `speckle_spread >= 0`, `0 <= dropout_probability <= 1`, `max_velocity_m_s > 0`.
+/// `0 < speckle_mean_level <= 1`, `speckle_spread >= 0`, `0 <= dropout_probability <= 1`, `max_velocity_m_s > 0`,
+/// `0 <= aim_error_rms_m <= 0.002`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LdvSpec {
@@ -20,6 +21,15 @@ pub struct LdvSpec {
     pub dropout_probability: f64,
     /// Full-scale velocity of the selected range, m/s; faster motion clips.
     pub max_velocity_m_s: f64,
+    /// Beam positioning error, m: the scanner's aim misses each commanded point by a random offset, normal in x and
+    /// in y with this standard deviation, drawn once per point (the same at every playback there). Optional key;
+    /// 0 (the default, not written) aims exactly.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub aim_error_rms_m: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 fn is_true(v: &bool) -> bool {

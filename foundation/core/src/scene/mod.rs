@@ -15,7 +15,9 @@
 //! Every imperfection the simulated lab models can be switched off ([`Imperfection`], [`Scene::without`],
 //! [`Scene::with_only`]), for error budgets: besides the keys every scene gives, `daq.bits = 0` (no quantisation)
 //! and the optional key `daq.clipping = false` (no clipping at the vibrometer's or the DAQ's range) exist for that.
-//! An optional key at its default is not written, so it changes no scene's identity.
+//! One imperfection is optional: `ldv.aim_error_rms_m`, the scanner's beam positioning error (m rms per axis, drawn
+//! once per point; 0, the default, aims exactly). An optional key at its default is not written, so it changes no
+//! scene's identity.
 //!
 //! The built-in scenes are the paper's two plates, `metamaterial` and `homogeneous` (files in `foundation/core/scenes/`).
 //! A user's file is checked key by key: an unknown key, a missing key, a value of the wrong type or outside its

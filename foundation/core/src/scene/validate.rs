@@ -253,6 +253,7 @@ impl Scene {
         non_negative("ldv.speckle_spread", l.speckle_spread, "")?;
         within("ldv.dropout_probability", l.dropout_probability, (0.0, 1.0), "", "")?;
         positive("ldv.max_velocity_m_s", l.max_velocity_m_s, "m/s")?;
+        within("ldv.aim_error_rms_m", l.aim_error_rms_m, (0.0, 0.002), "m", "")?;
 
         let d = &self.daq;
         if d.bits > 32 {
