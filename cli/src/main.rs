@@ -5,6 +5,7 @@
 use clap::{Parser, Subcommand};
 
 mod analyze;
+mod budget;
 mod cache;
 mod calibrate;
 mod check;
@@ -99,6 +100,9 @@ enum Command {
     /// against the ground truth, pixel area (JSON with --json, the Pareto plot with --figures DIR); the protocol
     /// names: `--help` of `--protocols`.
     Tradeoff(tradeoff::TradeoffArgs),
+    /// The Green's-function error budget of a scene on the mock lab: the processing floor (every imperfection
+    /// off), each imperfection alone, all on, per octave band, and whether the terms add up (JSON with --json).
+    Budget(budget::BudgetArgs),
     /// The simulated plate's ground truth: dispersion, Green's functions.
     Simulate {
         #[command(subcommand)]
@@ -151,6 +155,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Monitor(args) => monitor::run(&args),
         Command::Report(args) => report::run(&args),
         Command::Tradeoff(args) => tradeoff::run(&args),
+        Command::Budget(args) => budget::run(&args),
         Command::Simulate { command } => simulate::run(&command),
         Command::Calibrate(args) => calibrate::run(&args),
         Command::Scan(args) => scan::run(&args),

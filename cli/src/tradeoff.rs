@@ -146,15 +146,7 @@ fn measure(
     seed: u64,
     full_points: usize,
 ) -> anyhow::Result<ProtocolTrade> {
-    let dir = tempfile_dir()?;
-    let out = Output {
-        dir: dir.clone(),
-        scene: scene.id(),
-        software_version: env!("CARGO_PKG_VERSION").into(),
-        resume: false,
-        force: false,
-        preflight: None,
-    };
+    let (dir, out) = scratch_output(scene)?;
     let actuators = scene.actuators.len();
     let nominal = protocol.nominal_time_per_point_s(actuators);
     let name = protocol.name.clone();
@@ -198,8 +190,22 @@ fn median_pixel_area(dataset: &Dataset, plan: &ScanPlan) -> Option<f64> {
     pixel_area_map(&g, &plan.grid, &mask, &PixelAreaOptions::default()).ok()?.median_area_cm2()
 }
 
+/// A fresh run directory for a scan of `scene` on the mock lab, and the scan's output there (a new run).
+pub(crate) fn scratch_output(scene: &Scene) -> anyhow::Result<(PathBuf, Output)> {
+    let dir = tempfile_dir()?;
+    let out = Output {
+        dir: dir.clone(),
+        scene: scene.id(),
+        software_version: env!("CARGO_PKG_VERSION").into(),
+        resume: false,
+        force: false,
+        preflight: None,
+    };
+    Ok((dir, out))
+}
+
 /// A fresh directory under the system's temporary directory.
-fn tempfile_dir() -> anyhow::Result<PathBuf> {
+pub(crate) fn tempfile_dir() -> anyhow::Result<PathBuf> {
     let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos());
     let dir = std::env::temp_dir().join(format!("metaplate-tradeoff-{}-{nanos}", std::process::id()));
     std::fs::create_dir_all(&dir)?;

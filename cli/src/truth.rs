@@ -21,10 +21,12 @@ use serde_json::{Value, json};
 /// cannot compare (see [`MockLab::response_error_db`]).
 pub fn greens_errors(lab: &MockLab, dataset: &Dataset, filters: Option<&[KirkebyFilter]>) -> anyhow::Result<Vec<f64>> {
     let fs = dataset.sample_rate_hz();
+    let pre_samples = dataset.manifest().meta.description.as_ref().map_or(0, |d| d.pre_samples as usize);
     let mut errors = Vec::with_capacity(dataset.len());
     for (row, meta) in dataset.rows().iter().enumerate() {
         let ir = dataset.row_ir(row).context("a row without its impulse response")?;
         let ir: Vec<f64> = ir.iter().map(|v| f64::from(*v)).collect();
+        let ir = metaplate_lab::time_zero_first(&ir, pre_samples);
         let filter = match filters {
             Some(filters) => Some(filters.get(usize::from(meta.actuator)).context("no filter for an actuator")?),
             None => None,

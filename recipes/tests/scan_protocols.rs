@@ -36,6 +36,10 @@ fn run(protocol: &str, nx: usize, ny: usize) -> (Vec<f64>, f64, ScanSummary, Vec
     for &p in &plan.points {
         for a in 0..scene.actuators.len() {
             let ir: Vec<f64> = dataset.ir(p as u32, a as u16).unwrap().iter().map(|v| f64::from(*v)).collect();
+            let ir = metaplate_lab::time_zero_first(
+                &ir,
+                dataset.manifest().meta.description.as_ref().unwrap().pre_samples as usize,
+            );
             errors.push(lab.response_error_db(p, a, &ir, dataset.sample_rate_hz(), ERROR_BAND_HZ, None).unwrap());
         }
     }

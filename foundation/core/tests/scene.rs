@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use metaplate_core::scene::{
-    CANONICAL_FORM_VERSION, FaultKind, Outline, ResonatorModel, ResonatorSpec, SCENE_HASH_PREFIX, Scene, SceneError,
+    CANONICAL_FORM_VERSION, FaultKind, Imperfection, Outline, ResonatorModel, ResonatorSpec, SCENE_HASH_PREFIX, Scene,
+    SceneError,
 };
 
 const METAMATERIAL: &str = include_str!("../scenes/metamaterial.toml");
@@ -423,7 +424,7 @@ fn every_validation_error_names_file_key_and_reason() {
             "ldv.speckle_mean_level",
             "(0, 1]",
         ),
-        (mutate("bits = 16", "bits = 0"), Kind::Invalid, "daq.bits", "1..=32"),
+        (mutate("bits = 16", "bits = 33"), Kind::Invalid, "daq.bits", "1..=32"),
         (
             mutate("clock_offset_ppm = 20.0", "clock_offset_ppm = 5000.0"),
             Kind::Invalid,
@@ -555,4 +556,46 @@ fn a_setup_table_changes_the_identity_not_the_physics() {
     noisier.name = "noisier".into();
     assert_eq!(noisier.physics_hash(), s.physics_hash());
     assert_ne!(Scene::builtin("homogeneous").unwrap().physics_hash(), s.physics_hash());
+}
+
+#[test]
+fn every_imperfection_switches_off_on_the_same_plate() {
+    for name in Scene::builtin_names() {
+        let s = Scene::builtin(name).unwrap();
+        // The built-ins have every imperfection but faults and an aiming error.
+        let absent = [Imperfection::Faults, Imperfection::AimError];
+        for &i in Imperfection::all() {
+            assert_eq!(i.is_present(&s), !absent.contains(&i), "{name}: {i}");
+            assert_eq!(Imperfection::by_name(i.name()), Some(i));
+            let off = s.without(&[i]);
+            assert!(!i.is_present(&off), "{name}: {i} is off");
+            // Each switch touches its own imperfection alone.
+            for &j in Imperfection::all().iter().filter(|&&j| j != i) {
+                assert_eq!(j.is_present(&off), j.is_present(&s), "{name}: {i} off leaves {j}");
+            }
+            assert_eq!(off.physics_hash(), s.physics_hash(), "{name}: {i} off shares the Green's functions");
+            assert_eq!(off.id() != s.id(), i.is_present(&s), "{name}: {i}");
+        }
+        let ideal = s.with_only(&[]);
+        assert!(Imperfection::all().iter().all(|i| !i.is_present(&ideal)));
+        assert_eq!((ideal.daq.bits, ideal.daq.clipping, ideal.ldv.noise_rms_m_s), (0, false, 0.0));
+        assert_eq!(s.with_only(Imperfection::all()), s);
+        assert_eq!(s.with_only(&[Imperfection::LdvNoise]), s.without(&Imperfection::all()[1..]));
+        // The ideal scene is a valid scene file, the optional keys written and read back.
+        let text = ideal.to_toml_string();
+        assert!(text.contains("clipping = false") && text.contains("bits = 0"), "{text}");
+        assert_eq!(Scene::from_toml_str(&text, "ideal").unwrap(), ideal);
+        // The default writes no optional key (the identity pinned above is unchanged).
+        assert!(!s.to_toml_string().contains("clipping") && !s.to_toml_string().contains("aim_error"));
+        // The aiming error reads, writes and switches off.
+        let mut aimed = s.clone();
+        aimed.ldv.aim_error_rms_m = 0.0005;
+        let text = aimed.to_toml_string();
+        assert!(text.contains("aim_error_rms_m = 0.0005"), "{text}");
+        assert_eq!(Scene::from_toml_str(&text, "aimed").unwrap(), aimed);
+        assert!(Imperfection::AimError.is_present(&aimed) && aimed.with_only(&[]).ldv.aim_error_rms_m == 0.0);
+        assert_eq!(aimed.physics_hash(), s.physics_hash());
+        let bad = text.replace("aim_error_rms_m = 0.0005", "aim_error_rms_m = 0.5");
+        assert!(Scene::from_toml_str(&bad, "bad").unwrap_err().to_string().contains("ldv.aim_error_rms_m"));
+    }
 }

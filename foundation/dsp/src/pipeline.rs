@@ -131,17 +131,6 @@ impl PreparedLayout {
     pub fn new(layout: &RepetitionLayout, cfg: &DeconvConfig) -> Result<Self, DspError> {
         cfg.validate()?;
         layout.validate()?;
-        // The periodic path builds the response from time 0 on; rather than ignore a request for a two-sided one,
-        // refuse it (one repetition goes through `deconvolve_with_reference`, which honours it).
-        if cfg.pre_samples > 0 && layout.repetitions >= 2 {
-            return Err(DspError::InvalidParameter {
-                name: "pre_samples",
-                reason: format!(
-                    "{} requested, but the periodic pipeline returns responses from time 0: use 0 with {} repetitions",
-                    cfg.pre_samples, layout.repetitions
-                ),
-            });
-        }
         let template = ExcitationTemplate::new(&layout.excitation, cfg.band.as_ref(), cfg.sample_rate_hz)?;
         // The shortest kernel accurate over the band and its skirts: beyond them the band limit zeroes the result.
         let top_hz = cfg.band.map_or(cfg.sample_rate_hz / 2.0, |b| b.hi_hz + b.hi_transition_hz);
@@ -210,7 +199,7 @@ impl PreparedLayout {
         fft::forward_destructive(&mut reference_period, &mut reference)?;
 
         let response = divide_spectra(&velocity_mean.mean, &reference, gains, cfg.regularisation)?;
-        let ir = to_recorder_clock(&fft::inverse(&response, n)?, ratio, cfg.ir_len, interpolator)?;
+        let ir = to_recorder_clock(&fft::inverse(&response, n)?, ratio, cfg.ir_len, cfg.pre_samples, interpolator)?;
 
         // Refine the latency on the resampled loopback, which no longer has a stretch: its offset from the
         // excitation is where the first repetition starts within the first period.
@@ -222,21 +211,28 @@ impl PreparedLayout {
 }
 
 /// The impulse response on the recorder's clock from one period of it on the player's clock (`period_ir`, `n`
-/// samples, circular): `h_rec[m] = h_player(m / ratio) / ratio`, the scaling that keeps its integral. Without it
-/// the response would be stretched by the drift, 0.35 sample at the end of 0.4 s at 37 ppm, -50 dB at 625 Hz.
+/// samples, circular): `h_rec[m] = h_player(m / ratio) / ratio` for `m` from `-pre_samples` on, `ir_len` samples,
+/// the scaling that keeps its integral. Without it the response would be stretched by the drift, 0.35 sample at the
+/// end of 0.4 s at 37 ppm, -50 dB at 625 Hz. The period is circular, so the band limit's precursor (negative time)
+/// lies at its end: a two-sided response (`pre_samples > 0`) takes it from there.
 fn to_recorder_clock(
     period_ir: &[f64],
     ratio: f64,
     ir_len: usize,
+    pre_samples: usize,
     interpolator: &Interpolator,
 ) -> Result<Vec<f64>, DspError> {
     let n = period_ir.len();
     let hw = interpolator.half_width().min(n / 2);
-    // The first `ir_len` recorder samples reach player time `ir_len / ratio`, plus the kernel's half-width.
-    let reach = ((ir_len as f64 / ratio).ceil() as usize + hw + 1).min(n - hw);
-    // Circular extension: the kernel at time 0 needs the end of the period, which precedes time 0.
-    let extended: Vec<f64> = period_ir[n - hw..].iter().chain(&period_ir[..reach]).copied().collect();
-    let mut ir = interpolator.resample(&extended, hw as f64, 1.0 / ratio, ir_len)?;
+    // Player samples before time 0 the first output sample needs: its own time plus the kernel's half-width (for a
+    // one-sided response exactly the half-width, so that its positions, and so its bits, are as they always were).
+    let before = if pre_samples == 0 { hw } else { ((pre_samples as f64 / ratio).ceil() as usize + hw + 1).min(n / 2) };
+    // The last recorder sample reaches player time `(ir_len - pre_samples) / ratio`, plus the half-width.
+    let reach = ((ir_len.saturating_sub(pre_samples) as f64 / ratio).ceil() as usize + hw + 1).min(n - before);
+    // Circular extension: time 0 needs the end of the period, which precedes it.
+    let extended: Vec<f64> = period_ir[n - before..].iter().chain(&period_ir[..reach]).copied().collect();
+    let start = before as f64 - pre_samples as f64 / ratio;
+    let mut ir = interpolator.resample(&extended, start, 1.0 / ratio, ir_len)?;
     ir.iter_mut().for_each(|v| *v /= ratio);
     check_result("impulse response", &ir)?;
     Ok(ir)
@@ -358,12 +354,26 @@ mod tests {
     }
 
     #[test]
-    fn a_two_sided_response_is_refused_with_repetitions_not_ignored() {
-        let two_sided = DeconvConfig { pre_samples: 64, ..cfg() };
-        let err = PreparedLayout::new(&layout(3), &two_sided).unwrap_err();
-        assert!(matches!(err, DspError::InvalidParameter { name: "pre_samples", .. }), "{err}");
-        // One repetition goes through reference deconvolution, which honours it.
-        assert!(PreparedLayout::new(&layout(1), &two_sided).is_ok());
+    fn a_two_sided_response_takes_the_precursor_from_the_end_of_the_period() {
+        // A pure delay of 3 samples: band-limited, it rings on both sides of sample 3. The two-sided response is
+        // the one-sided one shifted by pre_samples, with the precursor in front, and matches the band-limited truth
+        // on both sides (the one-sided one misses the precursor).
+        let l = layout(3);
+        let mut ir = vec![0.0; 4];
+        ir[3] = 0.5;
+        let (velocity, loopback) = acquisition(&l, 1000, 700, &ir);
+        let pre = 64;
+        let one = process_channel(&velocity, &loopback, &l, &cfg()).unwrap();
+        let two = process_channel(&velocity, &loopback, &l, &DeconvConfig { pre_samples: pre, ..cfg() }).unwrap();
+        assert_eq!(two.ir.len(), 512);
+        for (a, b) in one.ir[..512 - pre].iter().zip(&two.ir[pre..]) {
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+        let precursor: f64 = two.ir[..pre].iter().map(|v| v * v).sum();
+        assert!(precursor > 1e-6, "the band limit rings before time 0: {precursor:e}");
+        // Against the band-limited truth, both sides of it.
+        let err_two = two_sided_in_band_error(&two.ir, &ir, 4800, pre);
+        assert!(err_two < BIAS_BOUND, "two-sided in-band error {err_two:e}");
     }
 
     /// Loopback: the copies from `latency` (whole samples, no drift), then `tail` samples of silence; velocity:
@@ -381,11 +391,26 @@ mod tests {
     /// Relative in-band error energy of `ir` against `truth` band-limited like the pipeline does (the band's gains
     /// on a length-n FFT) and truncated alike: the band limit's skirts ring for ~1 / 50 Hz, as long as the IR.
     fn in_band_error(ir: &[f64], truth: &[f64], n: usize) -> f64 {
+        two_sided_in_band_error(ir, truth, n, 0)
+    }
+
+    /// As [`in_band_error`] for an `ir` from time `-pre` on: both it and the reference are laid on the length-n
+    /// circle with time 0 first and the precursor wrapped to the end.
+    fn two_sided_in_band_error(ir: &[f64], truth: &[f64], n: usize, pre: usize) -> f64 {
         let g = cfg().band.unwrap().bin_gains(n, FS);
         let limited: Vec<Complex64> = fft::forward(truth, n).unwrap().iter().zip(&g).map(|(c, g)| c * g).collect();
-        let reference = &fft::inverse(&limited, n).unwrap()[..ir.len()];
-        let diff: Vec<f64> = ir.iter().zip(reference).map(|(a, b)| a - b).collect();
-        let (e, t) = (fft::forward(&diff, n).unwrap(), fft::forward(reference, n).unwrap());
+        let period = fft::inverse(&limited, n).unwrap();
+        let on_circle = |x: &[f64]| {
+            let mut c = vec![0.0; n];
+            c[..x.len() - pre].copy_from_slice(&x[pre..]);
+            c[n - pre..].copy_from_slice(&x[..pre]);
+            c
+        };
+        let mut reference_two_sided = period[n - pre..].to_vec();
+        reference_two_sided.extend_from_slice(&period[..ir.len() - pre]);
+        let reference = on_circle(&reference_two_sided);
+        let diff: Vec<f64> = on_circle(ir).iter().zip(&reference).map(|(a, b)| a - b).collect();
+        let (e, t) = (fft::forward(&diff, n).unwrap(), fft::forward(&reference, n).unwrap());
         let band = |k: &usize| (300.0..=2500.0).contains(&fft::bin_freq_hz(*k, n, FS));
         let err: f64 = (0..e.len()).filter(band).map(|k| e[k].norm_sqr()).sum();
         err / (0..t.len()).filter(band).map(|k| t[k].norm_sqr()).sum::<f64>()

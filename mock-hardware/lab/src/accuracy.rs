@@ -11,7 +11,8 @@ use num_complex::Complex64;
 use crate::{LabError, MockLab};
 
 impl MockLab {
-    /// Relative error energy of a measured response `ir` (m/s per full scale, sampled at `sample_rate_hz`) against
+    /// Relative error energy of a measured response `ir` (m/s per full scale, sampled at `sample_rate_hz`, time 0 at
+    /// index 0: see [`time_zero_first`] for a two-sided one) against
     /// [`MockLab::true_response`] of (`point`, `actuator`), over the FFT bins of `ir` (its own length) within
     /// `band_hz`, dB: `10 log10(sum |H - T|^2 / sum |T|^2)`. -20 dB means the error is a tenth of the truth's
     /// amplitude ([`spectral_error_db`]). With `compensation`, the truth is taken through that inverse filter with its modelling delay
@@ -64,6 +65,16 @@ impl MockLab {
             reason: format!("{band_hz:?} Hz holds no bin where the truth is non-zero and finite ({e})"),
         })
     }
+}
+
+/// A two-sided impulse response (`ir[0]` at time `-pre_samples`) on its DFT's circle: time 0 first, the samples
+/// before it wrapped to the end, so that its DFT is the response's spectrum without a delay of `pre_samples`.
+/// [`MockLab::response_error_db`] compares responses in that form; a one-sided one (`pre_samples` 0) is returned as
+/// it is. A `pre_samples` beyond the response's length wraps the whole response (never panics).
+pub fn time_zero_first(ir: &[f64], pre_samples: usize) -> Vec<f64> {
+    let mut out = ir.to_vec();
+    out.rotate_left(pre_samples.min(ir.len()));
+    out
 }
 
 /// The filter's frequency response at the bins of an `n`-point DFT: its taps folded modulo `n` (exact: at those

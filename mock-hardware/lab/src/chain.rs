@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use metaplate_core::clock::{Clock, VirtualClock};
-use metaplate_core::rng::{mix64, unit_open};
+use metaplate_core::rng::{SplitMix64, mix64, unit_open};
 use metaplate_core::scene::FaultKind;
 use metaplate_dsp::fft;
 use metaplate_dsp::resample::Interpolator;
@@ -28,6 +28,8 @@ const DROPOUT_MIN_S: f64 = 0.020;
 const DROPOUT_SPAN_S: f64 = 0.080;
 /// Relative level below which spectrum bins count as empty when sizing the loopback's interpolator.
 const BAND_EDGE_LEVEL: f64 = 1e-7;
+/// Stream constant of the aiming error's draws.
+const AIM_STREAM: u64 = 0x0000_0A1A_0E44;
 /// Drive buffers whose forces are kept (one per actuator of a scan, plus room).
 const DRIVE_CACHE_LEN: usize = 16;
 
@@ -43,6 +45,10 @@ pub(crate) struct ChainParams {
     pub daq_ppm: f64,
     pub noise_rms_m_s: f64,
     pub dropout_probability: f64,
+    /// Whether the vibrometer's output clips at its range's full scale (the scene's `daq.clipping`).
+    pub clipping: bool,
+    /// Beam positioning error, m rms per axis (0: exact aim).
+    pub aim_error_rms_m: f64,
     /// Top of the Green's functions' band, Hz.
     pub band_hi_hz: f64,
 }
@@ -56,6 +62,52 @@ pub(crate) struct Plate {
     /// Half the grid spacing, m: how far the beam may be from a prepared point.
     pub tolerance_m: f64,
     pub coils: Vec<VoiceCoil>,
+    /// Per prepared point, how to take the response's slope there (grid points with prepared neighbours).
+    pub slopes: Vec<Slope>,
+}
+
+/// Finite differences for the slope of the response at a prepared point, along x and along y: the prepared-point
+/// indices `(minus, plus)` and their distance, m (`None`: no neighbour along that axis, no slope).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Slope {
+    pub x: Option<(usize, usize, f64)>,
+    pub y: Option<(usize, usize, f64)>,
+}
+
+impl Slope {
+    /// The grid neighbours of grid point `p`: `[x - 1, x + 1, y - 1, y + 1]`, `None` past the grid's edge.
+    pub fn grid_neighbours(grid: &metaplate_core::grid::GridSpec, p: usize) -> [Option<usize>; 4] {
+        let (ix, iy) = grid.indices(p);
+        let at = |x: Option<usize>, y: Option<usize>| match (x, y) {
+            (Some(x), Some(y)) if x < grid.nx && y < grid.ny => Some(grid.index(x, y)),
+            _ => None,
+        };
+        [
+            at(ix.checked_sub(1), Some(iy)),
+            at(Some(ix + 1), Some(iy)),
+            at(Some(ix), iy.checked_sub(1)),
+            at(Some(ix), Some(iy + 1)),
+        ]
+    }
+
+    /// The slope rule of point `p` (a flat grid index, or a driving point: none) among the prepared `points`:
+    /// central differences where both neighbours are prepared, one-sided where one is.
+    pub fn at(scene: &metaplate_core::scene::Scene, points: &[usize], p: usize) -> Slope {
+        if p >= scene.grid.len() {
+            return Slope::default();
+        }
+        let k = |q: Option<usize>| q.and_then(|q| points.iter().position(|&r| r == q));
+        let Some(me) = k(Some(p)) else { return Slope::default() };
+        let h = scene.grid.spacing_m;
+        let [xm, xp, ym, yp] = Slope::grid_neighbours(&scene.grid, p).map(k);
+        let axis = |minus: Option<usize>, plus: Option<usize>| match (minus, plus) {
+            (Some(m), Some(p)) => Some((m, p, 2.0 * h)),
+            (Some(m), None) => Some((m, me, h)),
+            (None, Some(p)) => Some((me, p, h)),
+            (None, None) => None,
+        };
+        Slope { x: axis(xm, xp), y: axis(ym, yp) }
+    }
 }
 
 impl Plate {
@@ -88,6 +140,8 @@ struct Scheduled {
     key: u64,
     /// Prepared point under the beam at playback start (None: beam off every prepared point, or laser off).
     point_k: Option<usize>,
+    /// Where the beam really is relative to that point, m (the aiming error; zero when exact).
+    aim_offset_m: (f64, f64),
     /// A random dropout: (start, end) virtual time, s.
     dropout_s: Option<(f64, f64)>,
     /// Time from the playback's start to the end of its last non-silent frame, s: the plate answers nothing to
@@ -209,6 +263,13 @@ impl LabState {
         if let Some(run) = self.run.as_mut() {
             run.noise_key = mix64(measurement ^ 0x0015_E000);
         }
+        // The aiming error is the scanner's at this point: keyed by the point alone, the same at every playback.
+        let aim_offset_m = if self.params.aim_error_rms_m > 0.0 {
+            let mut rng = SplitMix64::new(self.params.seed ^ site, AIM_STREAM);
+            (self.params.aim_error_rms_m * rng.normal(), self.params.aim_error_rms_m * rng.normal())
+        } else {
+            (0.0, 0.0)
+        };
         let draw = mix64(measurement ^ 0xD40F_0D40);
         let dropout_s = (unit_open(draw) < self.params.dropout_probability).then(|| {
             let at = playback.start_s + unit_open(mix64(draw)) * (playback.end_s() - playback.start_s);
@@ -227,6 +288,7 @@ impl LabState {
             playback: playback.clone(),
             key,
             point_k,
+            aim_offset_m,
             dropout_s,
             sounding_s: sounding_frames as f64 / playback.frame_rate_hz,
             rendered: None,
@@ -252,9 +314,9 @@ impl LabState {
 
     /// Renders playback `k` onto the DAQ samples of `run`.
     fn render(&mut self, k: usize, run: DaqRun, fd_hz: f64) -> Result<(), LabError> {
-        let (start_s, sounding_s, fa_hz, point_k) = {
+        let (start_s, sounding_s, fa_hz, point_k, aim_offset_m) = {
             let s = &self.playbacks[k];
-            (s.playback.start_s, s.sounding_s, s.playback.frame_rate_hz, s.point_k)
+            (s.playback.start_s, s.sounding_s, s.playback.frame_rate_hz, s.point_k, s.aim_offset_m)
         };
         // The DAQ samples the playback reaches: from just before it (the interpolator's reach) to the end of the
         // plate's ring-down after its last sound. Rendering no further keeps the rounding noise of the FFT
@@ -287,7 +349,7 @@ impl LabState {
         if let Some(point_k) = point_k
             && !effect.forces.is_empty()
         {
-            self.velocity_on_grid(&effect, point_k)?;
+            self.velocity_on_grid(&effect, point_k, aim_offset_m)?;
             let interp = Interpolator::for_band(self.params.band_hi_hz, grid_hz);
             interp.resample_into(&self.time, pos0, step, &mut velocity_m_s)?;
         }
@@ -301,12 +363,25 @@ impl LabState {
     }
 
     /// Plate velocity on the half-rate audio grid into `self.time` (length `effect.fft_len`), m/s.
-    fn velocity_on_grid(&mut self, effect: &DriveEffect, point_k: usize) -> Result<(), LabError> {
+    /// `aim_offset_m`: where the beam is relative to the point, m (first order, through the point's [`Slope`]).
+    fn velocity_on_grid(
+        &mut self,
+        effect: &DriveEffect,
+        point_k: usize,
+        aim_offset_m: (f64, f64),
+    ) -> Result<(), LabError> {
         let n = effect.fft_len;
         self.spectrum.clear();
         self.spectrum.resize(fft::bin_count(n), Complex64::new(0.0, 0.0));
         for (actuator, force) in &effect.forces {
-            let greens = greens_spectrum(&self.plate.greens, point_k, *actuator, n, force.len())?;
+            let greens = if aim_offset_m == (0.0, 0.0) {
+                greens_spectrum(&self.plate.greens, point_k, *actuator, n, force.len())?
+            } else {
+                let ir = aimed_response(&self.plate, point_k, *actuator, aim_offset_m)?;
+                let mut spectrum = fft::forward(&ir, n)?;
+                spectrum.truncate(force.len());
+                spectrum
+            };
             for ((v, f), g) in self.spectrum.iter_mut().zip(force).zip(&greens) {
                 *v += f * g;
             }
@@ -388,8 +463,9 @@ impl LabState {
             }
         }
         let volts_per_m_s = 1.0 / range.m_per_s_per_v();
+        let clip = if self.params.clipping { full_scale } else { f64::INFINITY };
         for v in out.iter_mut() {
-            *v = v.clamp(-full_scale, full_scale) * volts_per_m_s;
+            *v = v.clamp(-clip, clip) * volts_per_m_s;
         }
         Ok(())
     }
@@ -453,6 +529,29 @@ fn greens_spectrum(
     let mut spectrum = fft::forward(ir, fft_len)?;
     spectrum.truncate(bins);
     Ok(spectrum)
+}
+
+/// The response from actuator `actuator` at the spot `offset_m` (m) from prepared point `point_k`: the point's
+/// response plus the offset times its slope along each axis that has one (see [`Slope`]).
+fn aimed_response(plate: &Plate, point_k: usize, actuator: usize, offset_m: (f64, f64)) -> Result<Vec<f64>, LabError> {
+    let greens = &plate.greens;
+    let actuator_k = greens
+        .actuators
+        .iter()
+        .position(|&a| a == actuator)
+        .ok_or(LabError::NotPrepared { what: format!("actuator {actuator}") })?;
+    let ir = |k: usize| greens.ir(k, actuator_k).ok_or(LabError::NotPrepared { what: format!("point #{k}") });
+    let mut out = ir(point_k)?.to_vec();
+    let slope = plate.slopes.get(point_k).copied().unwrap_or_default();
+    for (axis, d) in [(slope.x, offset_m.0), (slope.y, offset_m.1)] {
+        if let Some((minus, plus, span_m)) = axis {
+            let (m, p) = (ir(minus)?, ir(plus)?);
+            for ((o, a), b) in out.iter_mut().zip(p).zip(m) {
+                *o += d * (a - b) / span_m;
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The force spectra and loopback of one drive buffer.

@@ -33,7 +33,9 @@
 //!    expected to pick; the lab uses the range actually selected.)
 //! 5. The DAQ samples input 0 (LDV output) and input 1 (loopback channel × `loopback_volts_per_full_scale`) at its
 //!    true rate `fs_d = 24 kHz * (1 + daq ppm)` from the moment it was started, digitised to 16 bits with
-//!    clipping by the mock DAQ, and streamed through its bulk protocol to the real driver.
+//!    clipping by the mock DAQ, and streamed through its bulk protocol to the real driver. A scene with another
+//!    `daq.bits` (0: ideal) or `daq.clipping = false` gets an in-process DAQ instead (`direct_daq`: the same
+//!    samples, digitised as the scene says, no USB link and none of its faults), for error budgets.
 //!
 //! # Clocks
 //! Everything runs on one [`VirtualClock`] (true time). The DAQ's sample `n` is taken at `t0 + n / fs_d`, `t0`
@@ -73,6 +75,11 @@
 //!
 //! # Simplifications
 //! - The beam is read once per playback (at submit): moving it during a playback does not change that playback.
+//! - An aiming error (`ldv.aim_error_rms_m`) offsets the beam from each commanded point by a normal draw per point
+//!   (keyed by the seed and the point, the same at every playback there); the response at the offset spot is the
+//!   point's plus the offset times the response's slope, by differences with the neighbouring grid points (the lab
+//!   prepares them), central where both exist: first order in the offset, fine for offsets far below the 5 mm step
+//!   and the shortest wavelength.
 //! - A DAQ acquisition records only the playbacks submitted during it: the ring-down of an earlier playback (the
 //!   previous unit's last sweep) is not carried into the next acquisition, and a random dropout's low `SIG?`
 //!   reading ends when the beam moves. So what a measurement yields depends on (scene, seed, what is played where)
@@ -88,12 +95,14 @@
 //!   is seen as a timeout (see `PtyServer`).
 
 mod accuracy;
+pub mod budget;
 mod chain;
+mod direct_daq;
 mod links;
 pub mod session;
 mod truth;
 
-pub use accuracy::ERROR_BAND_HZ;
+pub use accuracy::{ERROR_BAND_HZ, time_zero_first};
 
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -113,6 +122,10 @@ use metaplate_plate::{GreensFunctions, GreensRequest, ModelOptions, greens_funct
 use num_complex::Complex64;
 
 pub use chain::LabStats;
+
+/// Resolution of the mock DAQ's wire protocol, bits: a scene's DAQ of this resolution, clipping, records through
+/// it; any other is served in process (see the `daq` docs of the scene).
+const PROTOCOL_BITS: u32 = 16;
 
 /// Why the lab could not be built or used.
 #[derive(Debug, thiserror::Error)]
@@ -285,6 +298,8 @@ impl MockLab {
             points.extend((0..scene.actuators.len()).map(|k| grid_len + k));
             points
         });
+        // An aiming error needs the response's slope at each grid point: its measurable grid neighbours too.
+        let points = if scene.ldv.aim_error_rms_m > 0.0 { with_grid_neighbours(&scene, points) } else { points };
         let request = GreensRequest {
             points: points.clone(),
             actuators: (0..scene.actuators.len()).collect(),
@@ -295,6 +310,7 @@ impl MockLab {
         let greens = greens_functions(&scene, &options.model, &request, options.cache_dir.as_deref())?;
         let coils = VoiceCoil::for_scene(&scene, scene.audio.sample_rate_hz)?;
         let plate = Arc::new(chain::Plate {
+            slopes: points.iter().map(|&p| chain::Slope::at(&scene, &points, p)).collect(),
             positions_m: points.iter().map(|&p| point_position_m(&scene, p)).collect(),
             tolerance_m: scene.grid.spacing_m / 2.0,
             greens,
@@ -333,6 +349,8 @@ impl MockLab {
             daq_ppm: scene.daq.clock_offset_ppm,
             noise_rms_m_s: scene.ldv.noise_rms_m_s,
             dropout_probability: scene.ldv.dropout_probability,
+            clipping: scene.daq.clipping,
+            aim_error_rms_m: scene.ldv.aim_error_rms_m,
             band_hi_hz: hi,
         };
         let state = chain::LabState::new(
@@ -397,13 +415,21 @@ impl MockLab {
                 });
             }
         };
-        let source = Box::new(chain::LabSource(self.shared.clone()));
-        let device = MockDaq::new(usb6211_info("LAB-DAQ-0001"), source)
-            .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
-        let transport = MockTransport::new(device, metaplate_mock_daq::FaultSchedule::none());
-        let link = links::LabDaqLink::new(transport, Arc::clone(&self.clock), &self.windows, self.shared.clone());
-        let daq = DaqDriver::open(link, DriverSettings::default())
-            .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
+        let daq: Box<dyn metaplate_core::daq::Daq + Send> = if self.scene.daq.bits == PROTOCOL_BITS
+            && self.scene.daq.clipping
+        {
+            let source = Box::new(chain::LabSource(self.shared.clone()));
+            let device = MockDaq::new(usb6211_info("LAB-DAQ-0001"), source)
+                .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
+            let transport = MockTransport::new(device, metaplate_mock_daq::FaultSchedule::none());
+            let link = links::LabDaqLink::new(transport, Arc::clone(&self.clock), &self.windows, self.shared.clone());
+            Box::new(
+                DaqDriver::open(link, DriverSettings::default())
+                    .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?,
+            )
+        } else {
+            Box::new(direct_daq::DirectDaq::new(self.shared.clone(), self.scene.daq.bits, self.scene.daq.clipping))
+        };
         // The interface runs at its own clock setting, which the setup may have left at another rate than the rig
         // asks for.
         let mut audio = self.scene.audio;
@@ -412,13 +438,7 @@ impl MockLab {
         }
         let pcm = MockPcm::new(&audio, Arc::clone(&self.clock), &self.scene.faults)
             .with_observer(Arc::new(self.shared.clone()));
-        Ok(Rig {
-            vibrometer,
-            daq: Box::new(daq),
-            audio: Box::new(AudioDriver::new(pcm)),
-            clock,
-            wiring: self.wiring.clone(),
-        })
+        Ok(Rig { vibrometer, daq, audio: Box::new(AudioDriver::new(pcm)), clock, wiring: self.wiring.clone() })
     }
 
     /// The scene in force (with the seed override applied).
@@ -512,6 +532,22 @@ impl MockLab {
             })
             .collect()
     }
+}
+
+/// `points` and, after them, the measurable grid neighbours (one step along x or y) of its grid points that it
+/// lacks, in ascending order.
+fn with_grid_neighbours(scene: &Scene, mut points: Vec<usize>) -> Vec<usize> {
+    let mask = scene.grid_mask();
+    let mut extra: Vec<usize> = points
+        .iter()
+        .filter(|&&p| p < scene.grid.len())
+        .flat_map(|&p| chain::Slope::grid_neighbours(&scene.grid, p).into_iter().flatten())
+        .filter(|&q| mask[q] && !points.contains(&q))
+        .collect();
+    extra.sort_unstable();
+    extra.dedup();
+    points.extend(extra);
+    points
 }
 
 /// Where point `point` is, m: a grid point, or (from `grid.len()` on) an actuator's driving point.

@@ -53,6 +53,7 @@ mod tests {
             speckle_spread: spread,
             dropout_probability: 0.0,
             max_velocity_m_s: 1.0,
+            aim_error_rms_m: 0.0,
         }
     }
 

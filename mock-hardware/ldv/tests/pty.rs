@@ -24,6 +24,7 @@ fn serve(faults: FaultSchedule) -> (PtyServer, Arc<Mutex<MockDevice>>) {
         speckle_spread: 0.2,
         dropout_probability: 0.0,
         max_velocity_m_s: 0.25,
+        aim_error_rms_m: 0.0,
     };
     let controller = MockController::new(&spec, 3, "SN04512").unwrap();
     let device = Arc::new(Mutex::new(MockDevice::new(controller, faults)));

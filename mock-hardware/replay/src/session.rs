@@ -320,6 +320,7 @@ pub fn demo_ldv_spec() -> LdvSpec {
         speckle_spread: 0.2,
         dropout_probability: 0.0,
         max_velocity_m_s: 0.25,
+        aim_error_rms_m: 0.0,
     }
 }
 

@@ -101,7 +101,9 @@ pub fn error_db_compensated(
     fs: f64,
     filter: Option<&KirkebyFilter>,
 ) -> f64 {
+    // A scan's responses start `PRE_SAMPLES` before time 0.
     let ir: Vec<f64> = ir.iter().map(|v| f64::from(*v)).collect();
+    let ir = metaplate_lab::time_zero_first(&ir, metaplate_dsp::excitation::PRE_SAMPLES);
     lab.response_error_db(point, actuator, &ir, fs, BAND_HZ, filter).unwrap()
 }
 

@@ -34,17 +34,26 @@ pub(super) fn canonical_text(scene: &Scene) -> String {
 }
 
 /// Top-level keys of the file form that the simulated plate's response depends on: the seed (resonator spread),
-/// the plate, its supports and resonators, the actuators (positions, magnets) and the grid. Not the name, the
-/// instruments, the faults or the setup.
-const PHYSICS_KEYS: &[&str] = &["seed", "plate", "supports", "resonators", "voice_coil", "actuators", "grid"];
+/// the plate, its supports and resonators, the actuators' positions and the grid. Not the name, the voice coils
+/// (the top-level `voice_coil` and each actuator's: they turn the drive into force, which the plate model never
+/// sees, so an error budget that switches their spread or nonlinearity off shares the plate's Green's functions),
+/// the instruments, the faults or the setup.
+const PHYSICS_KEYS: &[&str] = &["seed", "plate", "supports", "resonators", "actuators", "grid"];
 
-/// The canonical text of the physics of `scene`: as [`canonical_text`], restricted to [`PHYSICS_KEYS`], under its
-/// own version line (`metaplate-scene-physics-v{VERSION}`).
+/// The canonical text of the physics of `scene`: as [`canonical_text`], restricted to [`PHYSICS_KEYS`] and without
+/// the actuators' voice coils, under its own version line (`metaplate-scene-physics-v{VERSION}`).
 pub(super) fn physics_text(scene: &Scene) -> String {
     let mut out = format!("metaplate-scene-physics-v{CANONICAL_FORM_VERSION}\n");
     match toml::Value::try_from(SceneFile::from(scene.clone())) {
         Ok(toml::Value::Table(mut table)) => {
             table.retain(|key, _| PHYSICS_KEYS.contains(&key));
+            if let Some(toml::Value::Array(actuators)) = table.get_mut("actuators") {
+                for actuator in actuators.iter_mut() {
+                    if let toml::Value::Table(entry) = actuator {
+                        entry.remove("voice_coil");
+                    }
+                }
+            }
             write_value(&mut out, "", &toml::Value::Table(table));
         }
         Ok(_) => {

@@ -12,6 +12,13 @@
 //! `ldv.speckle_mean_level` (a plate without retroreflective tape reads 0.05 to 0.1). A correct setup is the
 //! default and writes no table.
 //!
+//! Every imperfection the simulated lab models can be switched off ([`Imperfection`], [`Scene::without`],
+//! [`Scene::with_only`]), for error budgets: besides the keys every scene gives, `daq.bits = 0` (no quantisation)
+//! and the optional key `daq.clipping = false` (no clipping at the vibrometer's or the DAQ's range) exist for that.
+//! One imperfection is optional: `ldv.aim_error_rms_m`, the scanner's beam positioning error (m rms per axis, drawn
+//! once per point; 0, the default, aims exactly). An optional key at its default is not written, so it changes no
+//! scene's identity.
+//!
 //! The built-in scenes are the paper's two plates, `metamaterial` and `homogeneous` (files in `foundation/core/scenes/`).
 //! A user's file is checked key by key: an unknown key, a missing key, a value of the wrong type or outside its
 //! valid range is a [`SceneError`] naming the file, line and key path, never a panic.
@@ -21,6 +28,7 @@ mod canonical;
 mod error;
 mod fault;
 mod file;
+mod imperfection;
 mod instruments;
 mod outline;
 mod plate;
@@ -37,6 +45,7 @@ pub use actuator::{ActuatorSpec, VoiceCoilSpec};
 pub use canonical::CANONICAL_FORM_VERSION;
 pub use error::SceneError;
 pub use fault::{FaultKind, FaultSpec};
+pub use imperfection::Imperfection;
 pub use instruments::{AudioSpec, DaqSpec, LdvSpec};
 pub use outline::{EDGE_TOLERANCE_M, Outline};
 pub use plate::PlateSpec;
@@ -208,8 +217,8 @@ impl Scene {
     }
 
     /// A stable 64-bit hash (FNV-1a) of what the simulated plate's response depends on alone: the seed, the plate,
-    /// its supports and resonators, the actuators and the grid, in the canonical form; not the name, the
-    /// instruments, the faults or the setup. Caches of the plate's Green's functions key on it, so scenes that
+    /// its supports and resonators, the actuators' positions and the grid, in the canonical form; not the name, the
+    /// voice coils (they act on the drive, not on the plate), the instruments, the faults or the setup. Caches of the plate's Green's functions key on it, so scenes that
     /// differ only in their instruments or setup share them.
     pub fn physics_hash(&self) -> u64 {
         crate::hash::fnv1a_64(canonical::physics_text(self).bytes())

@@ -253,10 +253,11 @@ impl Scene {
         non_negative("ldv.speckle_spread", l.speckle_spread, "")?;
         within("ldv.dropout_probability", l.dropout_probability, (0.0, 1.0), "", "")?;
         positive("ldv.max_velocity_m_s", l.max_velocity_m_s, "m/s")?;
+        within("ldv.aim_error_rms_m", l.aim_error_rms_m, (0.0, 0.002), "m", "")?;
 
         let d = &self.daq;
-        if !(1..=32).contains(&d.bits) {
-            return problem("daq.bits", format!("must lie in 1..=32, got {}", d.bits));
+        if d.bits > 32 {
+            return problem("daq.bits", format!("must be 0 (ideal) or lie in 1..=32, got {}", d.bits));
         }
         positive("daq.range_v", d.range_v, "V")?;
         positive("daq.sample_rate_hz", d.sample_rate_hz, "Hz")?;
