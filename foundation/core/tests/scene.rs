@@ -18,7 +18,7 @@ const TOL_M: f64 = 1e-12;
 
 #[test]
 fn builtins_load_validate_and_transcribe_the_paper() {
-    assert_eq!(Scene::builtin_names(), ["metamaterial", "homogeneous"]);
+    assert_eq!(Scene::builtin_names(), ["metamaterial", "homogeneous", "metamaterial-untaped"]);
     for name in Scene::builtin_names() {
         let s = Scene::builtin(name).unwrap();
         assert_eq!(s.name, *name);
@@ -52,6 +52,26 @@ fn the_two_builtins_differ_only_in_resonators() {
     };
     assert_eq!(twin, homo);
     assert_ne!(meta.content_hash(), homo.content_hash());
+}
+
+#[test]
+fn the_untaped_plate_differs_only_in_the_vibrometers_light() {
+    let meta = Scene::builtin("metamaterial").unwrap();
+    let untaped = Scene::builtin("metamaterial-untaped").unwrap();
+    let twin = Scene {
+        name: untaped.name.clone(),
+        description: untaped.description.clone(),
+        ldv: untaped.ldv,
+        ..meta.clone()
+    };
+    assert_eq!(twin, untaped);
+    // Less light and more speckle and dropouts, the same noise floor at full level; the same plate, so the same
+    // Green's functions (one cache entry).
+    assert!(untaped.ldv.speckle_mean_level < meta.ldv.speckle_mean_level / 10.0);
+    assert!(untaped.ldv.speckle_spread > meta.ldv.speckle_spread);
+    assert!(untaped.ldv.dropout_probability > meta.ldv.dropout_probability);
+    assert_eq!(untaped.ldv.noise_rms_m_s, meta.ldv.noise_rms_m_s);
+    assert_eq!(untaped.physics_hash(), meta.physics_hash());
 }
 
 #[test]

@@ -75,10 +75,11 @@ pub struct SceneId {
 const BUILTINS: &[(&str, &str)] = &[
     ("metamaterial", include_str!("../../scenes/metamaterial.toml")),
     ("homogeneous", include_str!("../../scenes/homogeneous.toml")),
+    ("metamaterial-untaped", include_str!("../../scenes/metamaterial-untaped.toml")),
 ];
 
 /// The built-in names, in the order of [`BUILTINS`].
-const BUILTIN_NAMES: &[&str] = &["metamaterial", "homogeneous"];
+const BUILTIN_NAMES: &[&str] = &["metamaterial", "homogeneous", "metamaterial-untaped"];
 
 /// A whole simulated lab. See the module documentation for the file format; every field's valid range is on its
 /// type, and [`Scene::validate`] checks them all.
