@@ -11,6 +11,7 @@ use metaplate_analysis::focus::focus_snapshot;
 use metaplate_analysis::pixel::{PixelAreaMap, PixelAreaOptions, pixel_area_map};
 use metaplate_analysis::report::{PlateReport, ReportOptions, analyse};
 use metaplate_control::PropagationMatrices;
+use metaplate_control::pixels::PointSelection;
 use metaplate_core::grid::GridSpec;
 use metaplate_core::scene::{Outline, Scene};
 use metaplate_figures as figures;
@@ -45,11 +46,16 @@ pub struct AnalyzeArgs {
     /// Write the figures (PNG and SVG) into this directory.
     #[arg(long)]
     figures: Option<PathBuf>,
+    /// Analyse only the points whose every row's estimated error (the dataset's `estimated_error_db`, from the
+    /// spread of repetitions) is at most this, dB; the others are left out as if unmeasured (rows without an
+    /// estimate are kept). Default: every point.
+    #[arg(long, allow_hyphen_values = true)]
+    max_error_db: Option<f64>,
 }
 
 /// Runs `metaplate analyze`.
 pub fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
-    let out = analyse_dataset(&args.data, args.figures.as_deref())?;
+    let out = analyse_dataset(&args.data, args.figures.as_deref(), args.max_error_db)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
@@ -64,10 +70,12 @@ pub fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
 /// # Errors
 /// An unreadable dataset, propagation matrices that cannot be built, a figure that cannot be written. An analysis
 /// that fails on this dataset is not an error: it is listed under `errors` and its value is null.
-pub fn analyse_dataset(data: &Path, figures: Option<&Path>) -> anyhow::Result<Value> {
+pub fn analyse_dataset(data: &Path, figures: Option<&Path>, max_error_db: Option<f64>) -> anyhow::Result<Value> {
     let dataset = Dataset::open(data).with_context(|| format!("opening dataset {}", data.display()))?;
     let grid = dataset.manifest().meta.grid;
-    let g = PropagationMatrices::from_dataset(&dataset, G_BAND_HZ, None).context("building G(omega)")?;
+    let selection = max_error_db.map(|db| PointSelection::by_estimated_error(&dataset, db)).transpose()?;
+    let kept = selection.as_ref().map(|s| s.kept.as_slice());
+    let g = PropagationMatrices::from_dataset(&dataset, G_BAND_HZ, kept).context("building G(omega)")?;
     let report = analyse(&g, &grid, &ReportOptions::default())?;
     let mut mask = vec![false; grid.len()];
     for &p in g.points() {
@@ -89,6 +97,13 @@ pub fn analyse_dataset(data: &Path, figures: Option<&Path>) -> anyhow::Result<Va
     out["dataset"] = json!(data.display().to_string());
     out["scene"] = json!(dataset.manifest().meta.scene.name);
     out["points"] = json!(g.n_points());
+    if let Some(s) = &selection {
+        out["excluded_points"] = json!({
+            "max_error_db": s.max_error_db,
+            "excluded": s.excluded.iter().map(|(p, e)| json!({ "point_index": p, "estimated_error_db": e })).collect::<Vec<_>>(),
+            "kept_without_estimate": s.without_estimate,
+        });
+    }
     out["actuators"] = json!(g.n_actuators());
     if let Some(dir) = figures {
         let overlay = scene.as_ref().map_or_else(figures::PlateOverlay::default, plate_overlay);

@@ -168,7 +168,7 @@ fn run_plate(
     spinner.finish_and_clear();
 
     let spinner = progress::spinner(format!("[{name}] analyses and figures"));
-    let analysis = analyze::analyse_dataset(&scan_dir, Some(&dir.join("figures")))?;
+    let analysis = analyze::analyse_dataset(&scan_dir, Some(&dir.join("figures")), None)?;
     spinner.finish_and_clear();
 
     let pattern = render_pattern(&dataset, &calibration_dir, &dir.join("pattern.wav"))?;

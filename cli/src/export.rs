@@ -351,7 +351,8 @@ impl RecordWriter {
 /// 2. `metaplate grid=NXxNY spacing_m=H origin_m=X0,Y0`: the dataset's grid;
 /// 3. `metaplate scene=NAME scene_hash=HASH`: the scene id;
 /// 4. `metaplate status=S snr_db=X retries=R measured_at_us=T`: the row's quality (absent keys: not recorded);
-/// 5. `metaplate recipe=R seed=S`: where the dataset came from.
+/// 5. `metaplate recipe=R seed=S [estimated_error_db=E]`: where the dataset came from, and the row's estimated error
+///    when it has one (line 4 is full).
 ///
 /// Spaces inside a value are written `_`; a line is cut at 80 columns.
 pub struct IdLines;
@@ -387,12 +388,16 @@ impl SharedIds {
         if let Some(t) = row.measured_at_unix_us {
             quality.push_str(&format!(" measured_at_us={t}"));
         }
+        let source = match row.estimated_error_db {
+            Some(e) => cut(format!("{} estimated_error_db={e}", self.source)),
+            None => self.source.clone(),
+        };
         [
             format!("metaplate point={} actuator={}", row.point_index, row.actuator),
             self.grid.clone(),
             self.scene.clone(),
             cut(quality),
-            self.source.clone(),
+            source,
         ]
     }
 }
@@ -442,6 +447,11 @@ impl IdLines {
             name: Self::value(line, "scene")?.to_owned(),
             hash: Self::value(line, "scene_hash")?.to_owned(),
         })
+    }
+
+    /// The row's estimated error of ID line 5, dB, if it has one.
+    pub fn parse_estimated_error(line: &str) -> Option<f64> {
+        Self::value(line, "estimated_error_db").and_then(|v| v.parse::<f64>().ok()).filter(|v| v.is_finite())
     }
 
     /// The row quality of ID line 4: status, SNR (dB), retries, measurement time (µs since the Unix epoch).

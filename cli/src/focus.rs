@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_control::PropagationMatrices;
-use metaplate_control::pixels::{on_plate, snap_pixel};
+use metaplate_control::pixels::{PointSelection, on_plate, snap_pixel};
 use metaplate_control::render::{
     DriveSpectra, FocusOptions, compensate, normalise_peak, predicted_field, solve_drives,
 };
@@ -92,6 +92,11 @@ pub struct RenderOptions {
     /// Focus time of plain `impulse` targets, s from the start of the drive (default: half the period).
     #[arg(long)]
     pub focus_s: Option<f64>,
+    /// Use only the points whose every row's estimated error (the dataset's `estimated_error_db`, from the spread
+    /// of repetitions) is at most this, dB; a pixel on a point left out is refused. Rows without an estimate are
+    /// kept. Default: every point.
+    #[arg(long, allow_hyphen_values = true)]
+    pub max_error_db: Option<f64>,
 }
 
 impl Default for RenderOptions {
@@ -104,6 +109,7 @@ impl Default for RenderOptions {
             time_reversal: false,
             pad_s: None,
             focus_s: None,
+            max_error_db: None,
         }
     }
 }
@@ -216,6 +222,12 @@ pub fn render(
     let on_plate = on_plate(dataset);
     let points: Vec<u32> =
         specs.iter().map(|s| snap_pixel(dataset, s.x_m, s.y_m, &on_plate)).collect::<Result<_, _>>()?;
+    let selection = options.max_error_db.map(|db| PointSelection::by_estimated_error(dataset, db)).transpose()?;
+    if let Some(selection) = &selection {
+        for (spec, &point) in specs.iter().zip(&points) {
+            selection.check_pixel(spec.x_m, spec.y_m, point)?;
+        }
+    }
     let fs = dataset.sample_rate_hz();
     let ir_len = dataset.ir_len();
     let pad_s = options.pad_s.unwrap_or(ir_len as f64 / fs);
@@ -224,7 +236,8 @@ pub fn render(
     }
     let fft_len = ir_len + (pad_s * fs).round() as usize;
     let band = (options.band_lo_hz, options.band_hi_hz);
-    let g = PropagationMatrices::from_dataset_padded(dataset, band, None, fft_len).context("building G(omega)")?;
+    let kept = selection.as_ref().map(|s| s.kept.as_slice());
+    let g = PropagationMatrices::from_dataset_padded(dataset, band, kept, fft_len).context("building G(omega)")?;
     let focus_s = options.focus_s.unwrap_or(fft_len as f64 / fs / 2.0);
     let targets: Vec<PixelTarget> = specs
         .iter()

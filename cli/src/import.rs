@@ -284,6 +284,7 @@ pub fn import(files: &[PathBuf], out: &Path, grid_from_nodes: bool) -> anyhow::R
         }
         let (status, snr_db, retries, measured_at) = IdLines::parse_quality(&function.header.id_lines[3]);
         (meta.status, meta.snr_db, meta.retries, meta.measured_at_unix_us) = (status, snr_db, retries, measured_at);
+        meta.estimated_error_db = IdLines::parse_estimated_error(&function.header.id_lines[4]);
         shape.get_or_insert((converted.sample_rate_hz, converted.ir.len()));
         pending.push(IrRecord { meta, ir: converted.ir });
         if writer.is_none() {

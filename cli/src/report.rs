@@ -73,7 +73,7 @@ pub fn run(args: &ReportArgs) -> anyhow::Result<()> {
             bail!("two datasets of the scene `{name}`: a report holds one dataset per plate (write one report each)");
         }
         let spinner = progress::spinner(format!("[{name}] analyses and figures"));
-        let analysis = analyze::analyse_dataset(data, Some(&scratch.path().join(&name)))?;
+        let analysis = analyze::analyse_dataset(data, Some(&scratch.path().join(&name)), None)?;
         spinner.finish_and_clear();
         let scene = find_scene(&dataset, &scenes);
         let truth = if args.no_truth {

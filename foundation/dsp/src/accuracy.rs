@@ -4,6 +4,7 @@
 use num_complex::Complex64;
 
 use crate::error::{DspError, check_signal};
+use crate::fft;
 
 /// The band a Green's function's error is measured over, Hz: inside the flat part of the paper's deconvolution band
 /// (62..625 Hz, with skirts outside it) and the sweep.
@@ -41,6 +42,74 @@ pub fn spectral_error_db(measured: &[Complex64], reference: &[Complex64]) -> Res
     same_length(measured.len(), reference.len())?;
     let error: f64 = measured.iter().zip(reference).map(|(m, r)| (m - r).norm_sqr()).sum();
     error_ratio_db(error, reference.iter().map(Complex64::norm_sqr).sum())
+}
+
+/// The error a measured response probably has against its truth over [`ERROR_BAND_HZ`], dB, from the noise it
+/// carries: `10 log10(noise / (E - noise))`, where `E` is the response's energy within the band and `noise` the
+/// expected energy of the noise in it there (from the spread of repetitions: [`crate::pipeline::ChannelResult`]).
+/// It is the random part of [`spectral_error_db`] against the truth: biases that every repetition shares (an
+/// actuator's distortion, a clock's drift) do not show in a spread, so on a rig where they dominate the true error
+/// is larger.
+///
+/// Returns [`IDENTICAL_DB`] for no noise, and 0 dB where the noise is at least half the band's energy (the response
+/// is then no larger than its noise, and no finer estimate is meaningful).
+///
+/// Valid range: a finite, non-empty `ir` at `sample_rate_hz` (finite, > 0) whose DFT has a bin in the band with
+/// energy; finite `noise_energy >= 0`, in the units of `ir` squared summed over its samples.
+///
+/// # Errors
+/// [`DspError::Empty`] / [`DspError::NonFinite`] for `ir`; [`DspError::InvalidParameter`] for a bad noise energy or
+/// sample rate, or a response with no energy in the band (below 1e-12 of its whole energy: rounding).
+pub fn estimated_error_db(ir: &[f64], noise_energy: f64, sample_rate_hz: f64) -> Result<f64, DspError> {
+    check_signal("response", ir)?;
+    if !(noise_energy.is_finite() && noise_energy >= 0.0) {
+        return Err(DspError::InvalidParameter {
+            name: "noise_energy",
+            reason: format!("{noise_energy}: must be finite and >= 0"),
+        });
+    }
+    if !(sample_rate_hz.is_finite() && sample_rate_hz > 0.0) {
+        return Err(DspError::InvalidParameter {
+            name: "sample_rate_hz",
+            reason: format!("{sample_rate_hz}: must be finite and > 0"),
+        });
+    }
+    let energy = band_energy(ir, ERROR_BAND_HZ, sample_rate_hz)?;
+    let total: f64 = ir.iter().map(|v| v * v).sum();
+    // Below 1e-12 of the whole the band holds only the FFT's rounding of what lies outside it.
+    if !(energy > 1e-12 * total && energy.is_finite()) {
+        return Err(DspError::InvalidParameter {
+            name: "response",
+            reason: format!("has no energy within {ERROR_BAND_HZ:?} Hz ({energy})"),
+        });
+    }
+    if noise_energy == 0.0 {
+        return Ok(IDENTICAL_DB);
+    }
+    let signal = energy - noise_energy;
+    if signal <= noise_energy {
+        return Ok(0.0);
+    }
+    Ok((10.0 * (noise_energy / signal).log10()).max(IDENTICAL_DB))
+}
+
+/// Energy of `signal` within `band_hz`, in the units of its samples squared summed over them: by Parseval,
+/// `(1 / n) sum |X_k|^2` over the two-sided bins in the band (each one-sided bin but DC and Nyquist counts twice).
+///
+/// Valid range: a finite, non-empty signal; `sample_rate_hz > 0`.
+///
+/// # Errors
+/// As [`fft::forward`].
+pub fn band_energy(signal: &[f64], band_hz: (f64, f64), sample_rate_hz: f64) -> Result<f64, DspError> {
+    let n = signal.len();
+    let spectrum = fft::forward(signal, n)?;
+    Ok(spectrum
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| (band_hz.0..=band_hz.1).contains(&fft::bin_freq_hz(k, n, sample_rate_hz)))
+        .map(|(k, x)| if k == 0 || 2 * k == n { 1.0 } else { 2.0 } * x.norm_sqr())
+        .sum::<f64>()
+        / n as f64)
 }
 
 fn same_length(a: usize, b: usize) -> Result<(), DspError> {
@@ -90,6 +159,44 @@ mod tests {
         assert!(relative_error_db(&[], &[]).is_err());
         assert!(relative_error_db(&[f64::NAN; 4], &r).is_err());
         assert!(relative_error_db(&[1e300; 4], &r).is_err(), "an overflowing error is refused, not infinite");
+    }
+
+    #[test]
+    fn band_energy_is_parseval_within_the_band() {
+        let fs = 1000.0;
+        let n = 1000;
+        // A 100 Hz sine of amplitude 2 (energy n * 2^2 / 2 = 2000) and a 300 Hz one of amplitude 1 (500).
+        let x: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 / fs;
+                2.0 * (std::f64::consts::TAU * 100.0 * t).sin() + (std::f64::consts::TAU * 300.0 * t).cos()
+            })
+            .collect();
+        assert!((band_energy(&x, (0.0, 500.0), fs).unwrap() - 2500.0).abs() < 1e-9);
+        assert!((band_energy(&x, (80.0, 120.0), fs).unwrap() - 2000.0).abs() < 1e-9);
+        assert!(band_energy(&x, (350.0, 500.0), fs).unwrap() < 1e-18);
+    }
+
+    #[test]
+    fn the_estimate_is_noise_over_what_is_left_and_capped() {
+        let fs = 24000.0;
+        // An in-band sine whose band energy E is known: the estimate is noise / (E - noise).
+        let ir: Vec<f64> = (0..2400).map(|i| (std::f64::consts::TAU * 200.0 * i as f64 / fs).sin()).collect();
+        let e = band_energy(&ir, ERROR_BAND_HZ, fs).unwrap();
+        assert!((e - 1200.0).abs() < 1e-6, "{e}");
+        let db = estimated_error_db(&ir, e / 101.0, fs).unwrap();
+        assert!((db + 20.0).abs() < 1e-9, "{db}");
+        // Extremes: no noise; noise at or above half the energy; a response with nothing in the band.
+        assert_eq!(estimated_error_db(&ir, 0.0, fs).unwrap(), IDENTICAL_DB);
+        assert_eq!(estimated_error_db(&ir, e / 2.0, fs).unwrap(), 0.0);
+        assert_eq!(estimated_error_db(&ir, 1e300, fs).unwrap(), 0.0);
+        assert!(estimated_error_db(&ir, 1e-300, fs).unwrap() >= IDENTICAL_DB);
+        let dc = vec![1.0; 2400];
+        assert!(estimated_error_db(&dc, 1.0, fs).is_err(), "no energy in the band");
+        assert!(estimated_error_db(&ir, f64::NAN, fs).is_err());
+        assert!(estimated_error_db(&ir, -1.0, fs).is_err());
+        assert!(estimated_error_db(&ir, 1.0, 0.0).is_err());
+        assert!(estimated_error_db(&[], 1.0, fs).is_err());
     }
 
     #[test]

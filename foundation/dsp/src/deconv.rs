@@ -261,6 +261,21 @@ pub fn divide_spectra(
     }
 }
 
+/// How much [`divide_spectra`] scales its numerator at each bin, as an amplitude: `g |D| / (|D|^2 + eps)` with the
+/// same `eps` and band gains `g`. The noise of a numerator with variance `v` per bin leaves the division with
+/// variance `v` times its square (the row error estimate: `pipeline`).
+///
+/// Valid range and errors: as [`divide_spectra`] with the denominator alone (no numerator is read).
+pub fn division_gains(
+    denominator: &[Complex64],
+    band_gains: Option<&[f64]>,
+    regularisation: f64,
+) -> Result<Vec<f64>, DspError> {
+    let ones = vec![Complex64::new(1.0, 0.0); denominator.len()];
+    // The division of ones by D is conj(D) g / (|D|^2 + eps): its magnitude is the gain, with every check shared.
+    Ok(divide_spectra(&ones, denominator, band_gains, regularisation)?.iter().map(|h| h.norm()).collect())
+}
+
 /// Refuses a constant excitation of two or more samples: a DC level (an offset, or a dead channel) carries no
 /// designed content at any non-zero frequency; dividing by the edges of its rectangle would only amplify noise.
 /// A single sample is an impulse, a valid excitation.

@@ -36,6 +36,8 @@
 //! | `hadamard:DxR` | all actuators at once, 8 shots signed by the 8 x 8 Hadamard matrix, decoded by its transpose (8 x the energy per actuator per unit time) | linearity and superposition at the plate; odd-order distortion flips with the sign and stays with its actuator (as sequentially); even-order does not flip, so it can only land in actuator 0's (all-ones) column |
 //! | `interleaved:D` | all actuators in one shot, one exponential sweep each, staggered by a slot (the multiple exponential sweep method) | linearity; slot >= response (0.5 s) + the third harmonic's advance `L ln 3`, else refused; one period: no SNR estimate, no averaging; **no clock-drift correction**: actuator `k`'s response is cut at `k` slots on the recorder's clock, off by `k x slot x drift` (12 samples for actuator 7 at 50 ppm with 1.43 s slots), which costs it most of its accuracy at the top of the band (measured median error -10 dB on the mock lab, against -37 dB for the others) |
 //! | `adaptive:DxR@SNR[/ROUNDS]` (R >= 2) | Hadamard rounds (`hadamard:DxR`) averaged until every actuator's SNR reaches `SNR` dB, at most `ROUNDS` (default 8) | as `hadamard`; the SNR estimate is the spread of the periods; when the target is not met in `ROUNDS` rounds the rows are committed with status `failed` and the reason |
+//! | `sequential-adaptive:DxR@DB[/ROUNDS]` (R >= 2) | each actuator alone (as `sequential:DxR`), shot after shot, averaged until that actuator's own estimated error is `DB` dB or less, at most `ROUNDS` shots: each row gets the time its response needs | as `sequential`; the estimate sees the noise only |
+//! | `adaptive-error:DxR@DB[/ROUNDS]` (R >= 2) | Hadamard rounds averaged until every actuator's estimated error over 80..600 Hz ([`crate::pipeline::ChannelResult::estimated_error_db`]) is `DB` dB or less, at most `ROUNDS` | as `adaptive`; the estimate sees the noise, not biases every period shares (distortion, drift) |
 //!
 //! Every protocol keeps the paper's deconvolution ([`DeconvConfig::paper`]: 0.5 s responses, band 62..625 Hz);
 //! exponential sweeps use regularisation 1e-5 (their power falls 10 dB across the band, see
@@ -70,15 +72,53 @@ pub enum Scheme {
     },
 }
 
-/// Averaging rounds until a target SNR.
+/// Averaging rounds until a target.
 ///
-/// Valid range: finite `target_snr_db`; `max_rounds >= 1`.
+/// Valid range: a finite target; `max_rounds >= 1`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Adaptive {
-    /// Every actuator's SNR must reach this, dB.
-    pub target_snr_db: f64,
+    /// What every actuator's response at a point must reach before the point is committed.
+    pub target: AdaptiveTarget,
     /// Rounds (each one full set of shots) at most; then the point is committed, its short rows flagged.
     pub max_rounds: usize,
+}
+
+/// What an adaptive protocol's rounds aim for, per actuator at a point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AdaptiveTarget {
+    /// The SNR of the averaged velocity (the spread of the periods, over the deconvolution's band) at least this,
+    /// dB (`adaptive:DxR@SNR`).
+    SnrDb(f64),
+    /// The response's estimated error over [`crate::accuracy::ERROR_BAND_HZ`]
+    /// ([`crate::pipeline::ChannelResult::estimated_error_db`]) at most this, dB (`adaptive-error:DxR@DB`): what a
+    /// user of the Green's functions asks for, whatever the response's level at the point.
+    ErrorDb(f64),
+}
+
+impl AdaptiveTarget {
+    /// Whether an actuator with this SNR and estimated error (dB, `None` when unknown) has reached the target; an
+    /// unknown value never has.
+    pub fn reached(self, snr_db: Option<f64>, error_db: Option<f64>) -> bool {
+        match self {
+            Self::SnrDb(target) => snr_db.is_some_and(|s| s >= target),
+            Self::ErrorDb(target) => error_db.is_some_and(|e| e <= target),
+        }
+    }
+
+    /// The target's value, dB.
+    pub fn db(self) -> f64 {
+        match self {
+            Self::SnrDb(db) | Self::ErrorDb(db) => db,
+        }
+    }
+
+    /// What it measures, in messages: `SNR` or `estimated error`.
+    pub fn quantity(self) -> &'static str {
+        match self {
+            Self::SnrDb(_) => "SNR",
+            Self::ErrorDb(_) => "estimated error",
+        }
+    }
 }
 
 /// An excitation protocol: how the actuators are played at one grid point and how the recordings are decoded.
@@ -360,6 +400,11 @@ pub struct Decoder {
 }
 
 impl Decoder {
+    /// The recorder's rate the responses come out at, Hz.
+    pub fn sample_rate_hz(&self) -> f64 {
+        self.cfg.sample_rate_hz
+    }
+
     /// The response of one shot's recording by the periodic deconvolution: for a sequential protocol, the response
     /// of the shot's actuator (the scan decodes each actuator's acquisition as it comes).
     ///
@@ -423,7 +468,7 @@ impl Decoder {
                     .iter()
                     .map(|&start| {
                         let ir = total[start..start + cfg.ir_len].to_vec();
-                        Ok(ChannelResult { ir, snr_db: None, drift_ppm: 0.0, latency_samples: 0.0 })
+                        Ok(ChannelResult { ir, snr_db: None, drift_ppm: 0.0, latency_samples: 0.0, noise_energy: None })
                     })
                     .collect()
             }
@@ -488,6 +533,14 @@ pub const NAMES: &[(&str, &str)] = &[
     ("hadamard:DxR", "all 8 actuators at once, Hadamard-coded linear sweeps (8 shots)"),
     ("interleaved:D", "interleaved exponential sweeps (multiple exponential sweep method), one shot"),
     ("adaptive:DxR@SNR[/ROUNDS]", "Hadamard rounds averaged until SNR dB per actuator, at most ROUNDS"),
+    (
+        "adaptive-error:DxR@DB[/ROUNDS]",
+        "Hadamard rounds averaged until every actuator's estimated error is DB dB or less, at most ROUNDS",
+    ),
+    (
+        "sequential-adaptive:DxR@DB[/ROUNDS]",
+        "each actuator alone, shots of D s x R averaged until its own estimated error is DB dB or less",
+    ),
 ];
 
 /// The protocol called `name` (see the module's table).
@@ -537,19 +590,22 @@ pub fn parse(name: &str) -> Result<ExcitationProtocol, ProtocolNameError> {
             let slot_s = ((ir_s + advance_s + SLOT_MARGIN_S) * 1000.0).ceil() / 1000.0;
             base(sweep, 1, Scheme::Interleaved { slot_s })
         }
-        ("adaptive", s) => {
+        (kind @ ("adaptive" | "adaptive-error" | "sequential-adaptive"), s) => {
             let s = need(s, name)?;
-            let (dr, rest) = s.split_once('@').ok_or_else(|| bad("expected DxR@SNR[/ROUNDS]"))?;
+            let quantity = if kind == "adaptive" { "SNR" } else { "error" };
+            let (dr, rest) =
+                s.split_once('@').ok_or_else(|| bad(&format!("expected DxR@{}[/ROUNDS]", quantity.to_uppercase())))?;
             let (d, r) = duration_by_reps(dr).map_err(|e| bad(&e))?;
             if r < 2 {
-                // The SNR estimate is the spread of the periods: one period has none.
+                // The SNR and the error estimate are the spread of the periods: one period has none.
                 return Err(bad("adaptive averaging needs at least 2 periods per shot (its SNR estimate)"));
             }
-            let (snr, rounds) = match rest.split_once('/') {
-                Some((snr, rounds)) => (snr, Some(rounds)),
+            let (value, rounds) = match rest.split_once('/') {
+                Some((value, rounds)) => (value, Some(rounds)),
                 None => (rest, None),
             };
-            let target_snr_db = number(snr, "SNR").map_err(|e| bad(&e))?;
+            let value = number(value, quantity).map_err(|e| bad(&e))?;
+            let target = if kind == "adaptive" { AdaptiveTarget::SnrDb(value) } else { AdaptiveTarget::ErrorDb(value) };
             let max_rounds = match rounds {
                 Some(r) => r.parse::<usize>().map_err(|_| bad(&format!("rounds `{r}` is not a whole number")))?,
                 None => DEFAULT_ROUNDS,
@@ -557,8 +613,9 @@ pub fn parse(name: &str) -> Result<ExcitationProtocol, ProtocolNameError> {
             if !(1..=MAX_ROUNDS).contains(&max_rounds) {
                 return Err(bad(&format!("rounds {max_rounds} must be 1 to {MAX_ROUNDS}")));
             }
-            let adaptive = Some(Adaptive { target_snr_db, max_rounds });
-            ExcitationProtocol { adaptive, ..base(linear(d), r, Scheme::Hadamard) }
+            let adaptive = Some(Adaptive { target, max_rounds });
+            let scheme = if kind == "sequential-adaptive" { Scheme::Sequential } else { Scheme::Hadamard };
+            ExcitationProtocol { adaptive, ..base(linear(d), r, scheme) }
         }
         (other, _) => {
             let known: Vec<&str> = NAMES.iter().map(|(n, _)| *n).collect();
@@ -612,6 +669,10 @@ fn hadamard_decode(per_shot: &[ChannelResult], actuators: usize) -> Result<Vec<C
         .map(|r| r.snr_db.map(|snr| energy(&r.ir) / 10f64.powf(snr / 10.0)))
         .sum::<Option<f64>>()
         .map(|total| total / order / order);
+    // Each shot's noise in band, independent across shots: the decoded sum of N signed shots over N carries their
+    // total over N^2, whatever the signs.
+    let band_noise: Option<f64> =
+        per_shot.iter().map(|r| r.noise_energy).sum::<Option<f64>>().map(|total| total / order / order);
     let drift_ppm = per_shot.iter().map(|r| r.drift_ppm).sum::<f64>() / order;
     let latency_samples = per_shot.iter().map(|r| r.latency_samples).sum::<f64>() / order;
     (0..actuators)
@@ -623,7 +684,7 @@ fn hadamard_decode(per_shot: &[ChannelResult], actuators: usize) -> Result<Vec<C
             }
             check_result("Hadamard-decoded response", &ir)?;
             let snr_db = noise.filter(|n| *n > 0.0).map(|n| 10.0 * (energy(&ir) / n).log10()).filter(|s| s.is_finite());
-            Ok(ChannelResult { ir, snr_db, drift_ppm, latency_samples })
+            Ok(ChannelResult { ir, snr_db, drift_ppm, latency_samples, noise_energy: band_noise })
         })
         .collect()
 }
@@ -660,7 +721,17 @@ mod tests {
         // The slot the DSP protocol requires for 0.5 s responses must be met.
         assert!(i.validate(8, 0.5).is_ok(), "slot {slot_s}");
         let a = parse("adaptive:0.6x2@40/3").unwrap();
-        assert_eq!(a.adaptive, Some(Adaptive { target_snr_db: 40.0, max_rounds: 3 }));
+        assert_eq!(a.adaptive, Some(Adaptive { target: AdaptiveTarget::SnrDb(40.0), max_rounds: 3 }));
+        let e = parse("adaptive-error:0.6x2@-35/6").unwrap();
+        assert_eq!(e.adaptive, Some(Adaptive { target: AdaptiveTarget::ErrorDb(-35.0), max_rounds: 6 }));
+        assert_eq!((e.scheme, e.repetitions), (Scheme::Hadamard, 2));
+        assert!(AdaptiveTarget::ErrorDb(-35.0).reached(None, Some(-35.0)));
+        assert!(!AdaptiveTarget::ErrorDb(-35.0).reached(Some(90.0), Some(-34.9)));
+        assert!(!AdaptiveTarget::ErrorDb(-35.0).reached(Some(90.0), None), "unknown is not reached");
+        assert!(AdaptiveTarget::SnrDb(30.0).reached(Some(30.0), None));
+        let q = parse("sequential-adaptive:1x2@-30").unwrap();
+        assert_eq!((q.scheme, q.repetitions), (Scheme::Sequential, 2));
+        assert_eq!(q.adaptive, Some(Adaptive { target: AdaptiveTarget::ErrorDb(-30.0), max_rounds: DEFAULT_ROUNDS }));
         assert_eq!(parse("adaptive:0.6x2@40").unwrap().adaptive.map(|a| a.max_rounds), Some(DEFAULT_ROUNDS));
     }
 
@@ -676,6 +747,10 @@ mod tests {
             ("adaptive:1x2@x", "SNR"),
             ("adaptive:1x1@30", "at least 2 periods"),
             ("adaptive:1x2@30/0", "rounds"),
+            ("adaptive-error:1x1@-30", "at least 2 periods"),
+            ("adaptive-error:1x2@", "error"),
+            ("adaptive-error:1x2", "DxR@ERROR"),
+            ("adaptive-error", "needs settings"),
             ("interleaved:inf", "finite"),
         ] {
             let err = parse(name).unwrap_err().to_string();

@@ -77,6 +77,7 @@ fn to_record_batch(records: &[IrRecord]) -> Result<RecordBatch, arrow_schema::Ar
                 .with_timezone(schema::MEASURED_AT_TZ),
         ),
         Arc::new(StringArray::from_iter(metas().map(|m| m.kind.map(RowKind::as_str)))),
+        Arc::new(Float64Array::from_iter(metas().map(|m| m.estimated_error_db))),
     ];
     RecordBatch::try_new(arrow_schema(ir_len), columns)
 }
@@ -292,6 +293,12 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
         None => None,
         Some(c) => Some(c.as_string_opt::<i32>().ok_or_else(|| mismatch("column kind is not utf8"))?),
     };
+    let estimated_error_db = match batch.column_by_name(schema::ESTIMATED_ERROR_DB) {
+        None => None,
+        Some(c) => {
+            Some(c.as_primitive_opt::<Float64Type>().ok_or_else(|| mismatch("column estimated_error_db is not f64"))?)
+        }
+    };
     let ir = batch.column_by_name(schema::IR).ok_or_else(|| mismatch("column ir is missing"))?;
     // A fixed-size list (this version), or a list (files written before): the items and each row's offsets.
     let fixed_offsets: Vec<i32>;
@@ -342,6 +349,7 @@ fn decode_batch(batch: &RecordBatch, file: &str, out: &mut Decoded) -> Result<()
             retries: optional(retries, row),
             measured_at_unix_us: optional(measured_at, row),
             kind,
+            estimated_error_db: estimated_error_db.and_then(|c| optional(c, row)),
         });
         if ir.is_null(row) {
             return Err(invalid("ir is null".into()));

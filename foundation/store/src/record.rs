@@ -32,6 +32,9 @@ pub struct IrMeta {
     pub measured_at_unix_us: Option<i64>,
     /// What a calibration row holds; `None` for the rows of a scan or a simulation.
     pub kind: Option<RowKind>,
+    /// The response's estimated error against the truth over 80..600 Hz, dB (finite when present), from the spread
+    /// of its repetitions or shots; `None` where nothing estimates it.
+    pub estimated_error_db: Option<f64>,
 }
 
 /// One impulse response with its metadata: what a recipe commits and the writer stores as one row.
@@ -68,6 +71,7 @@ impl IrMeta {
             retries: None,
             measured_at_unix_us: None,
             kind: None,
+            estimated_error_db: None,
         };
         meta.check(grid).map_err(invalid)?;
         Ok(meta)
@@ -107,6 +111,11 @@ impl IrMeta {
             && !snr_db.is_finite()
         {
             return Err(format!("snr_db must be finite when present, got {snr_db}"));
+        }
+        if let Some(error_db) = self.estimated_error_db
+            && !error_db.is_finite()
+        {
+            return Err(format!("estimated_error_db must be finite when present, got {error_db}"));
         }
         Ok(())
     }
@@ -158,13 +167,20 @@ mod tests {
             IrMeta { x_m: f64::NAN, ..good },
             IrMeta { y_m: f64::NEG_INFINITY, ..good },
             IrMeta { snr_db: Some(f64::INFINITY), ..good },
+            IrMeta { estimated_error_db: Some(f64::NAN), ..good },
             IrMeta { sample_rate_hz: 0.0, ..good },
         ];
         for meta in bad {
             assert!(meta.check(&GRID).is_err(), "{meta:?}");
         }
         // Extremes that are in range.
-        let edge = IrMeta { snr_db: Some(-300.0), sample_rate_hz: f64::MIN_POSITIVE, x_m: -1e300, ..good };
+        let edge = IrMeta {
+            snr_db: Some(-300.0),
+            estimated_error_db: Some(-400.0),
+            sample_rate_hz: f64::MIN_POSITIVE,
+            x_m: -1e300,
+            ..good
+        };
         assert!(edge.check(&GRID).is_ok());
     }
 

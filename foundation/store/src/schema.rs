@@ -16,6 +16,7 @@
 //! | `retries` | u32 | yes | how many times the point was re-measured |
 //! | `measured_at` | timestamp (µs, UTC) | yes | when the response was measured |
 //! | `kind` | utf8 | yes | what a row of a calibration dataset is, one of [`RowKind`] (`filter`, `response`, `verification`); null elsewhere. Optional when reading: files written before it existed lack the column |
+//! | `estimated_error_db` | f64 | yes | the response's estimated error against the truth over 80..600 Hz, dB (relative error energy, as the mock lab's truth comparisons measure it), from the spread of the repetitions or shots: the noise's part of the error; null where nothing estimates it (one period per shot, a simulation, a calibration). Optional when reading: files written before it existed lack the column |
 //!
 //! Every batch file also carries file-level key-value metadata ([`file_metadata`]), so that one file read alone says
 //! what it holds (polars and pyarrow keep these, where polars drops the fields' metadata): `metaplate.recipe`,
@@ -58,6 +59,8 @@ pub const RETRIES: &str = "retries";
 pub const MEASURED_AT: &str = "measured_at";
 /// Column `kind`: what a calibration row is (utf8, nullable; see [`RowKind`]).
 pub const KIND: &str = "kind";
+/// Column `estimated_error_db`: the response's estimated error over 80..600 Hz, dB (f64, nullable).
+pub const ESTIMATED_ERROR_DB: &str = "estimated_error_db";
 
 /// What a row of a calibration dataset holds (column `kind`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -168,6 +171,7 @@ pub fn arrow_schema(ir_len: i32) -> SchemaRef {
         field(RETRIES, DataType::UInt32, true, None),
         field(MEASURED_AT, DataType::Timestamp(TimeUnit::Microsecond, Some(MEASURED_AT_TZ.into())), true, None),
         field(KIND, DataType::Utf8, true, None),
+        field(ESTIMATED_ERROR_DB, DataType::Float64, true, Some("dB")),
     ]))
 }
 

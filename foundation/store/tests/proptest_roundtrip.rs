@@ -51,6 +51,8 @@ fn dataset() -> impl Strategy<Value = (GridSpec, f64, Vec<IrRecord>, Vec<usize>)
                     // Positions need not be the nominal ones (a measured beam position); any finite value is valid.
                     (meta.x_m, meta.y_m) = (x_m, y_m);
                     (meta.snr_db, meta.status, meta.retries, meta.measured_at_unix_us) = (snr_db, status, retries, at);
+                    // The error estimate rides with the SNR (null with it), so both nulls and values round-trip.
+                    meta.estimated_error_db = snr_db.map(|s| -s);
                     IrRecord { meta, ir }
                 })
                 .collect();

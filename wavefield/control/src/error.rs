@@ -107,6 +107,25 @@ pub enum ControlError {
         /// The measured lattice's step along x and y, mm.
         step_mm: (f64, f64),
     },
+    /// The point a pixel snaps to was excluded for its Green's functions' estimated error
+    /// ([`crate::pixels::PointSelection`]).
+    #[error(
+        "the pixel at ({x_m} m, {y_m} m) snaps to point {point_index}, whose Green's functions' estimated error \
+         ({error_db:.1} dB) exceeds the limit of {max_error_db:.1} dB: move the pixel, re-measure the point, or raise \
+         the limit"
+    )]
+    PixelExcluded {
+        /// x on the plate, m.
+        x_m: f64,
+        /// y on the plate, m.
+        y_m: f64,
+        /// The point it snaps to (grid flat index).
+        point_index: u32,
+        /// That point's worst estimated error over its actuators, dB.
+        error_db: f64,
+        /// The limit in force, dB.
+        max_error_db: f64,
+    },
     /// Reading the dataset failed.
     #[error(transparent)]
     Store(#[from] StoreError),

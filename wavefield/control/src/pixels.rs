@@ -5,6 +5,9 @@
 //! and content hash); otherwise the measured grid's bounds widened by half a spacing. A pixel snaps to the nearest
 //! measured point, and is refused when that point is more than half the measured lattice's step away along either
 //! axis (a gap of the scan: a support, a masked point, or outside the measured points' hull).
+//!
+//! [`PointSelection`] leaves out the points whose Green's functions are estimated too inaccurate (each row's
+//! `estimated_error_db`, from the spread of its repetitions): `analyze` and `focus` use only the points it keeps.
 
 use metaplate_core::grid::GridSpec;
 use metaplate_core::scene::Scene;
@@ -78,4 +81,72 @@ pub fn snap_pixel(
 
 fn dist2(a: (f64, f64), b: (f64, f64)) -> f64 {
     (a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)
+}
+
+/// Which of a dataset's points to use, by their rows' estimated errors (the `estimated_error_db` column).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointSelection {
+    /// The limit, dB: a point is left out when any of its rows' estimated error exceeds it.
+    pub max_error_db: f64,
+    /// The points kept, ascending (grid flat indices).
+    pub kept: Vec<u32>,
+    /// The points left out, ascending, each with its worst row's estimated error, dB.
+    pub excluded: Vec<(u32, f64)>,
+    /// Kept points with at least one row that has no estimate (a simulation, one period per shot): nothing says
+    /// they are worse than the limit.
+    pub without_estimate: usize,
+}
+
+impl PointSelection {
+    /// Selects the points of `dataset` whose every row's estimated error is at most `max_error_db`.
+    ///
+    /// Valid range: `max_error_db` not NaN (infinite keeps every point).
+    ///
+    /// # Errors
+    /// [`ControlError::InvalidParameter`] for a NaN limit; [`ControlError::Empty`] when no point is kept.
+    pub fn by_estimated_error(dataset: &Dataset, max_error_db: f64) -> Result<PointSelection, ControlError> {
+        if max_error_db.is_nan() {
+            return Err(ControlError::InvalidParameter { name: "max_error_db", reason: "is NaN".into() });
+        }
+        let mut worst: std::collections::BTreeMap<u32, (Option<f64>, bool)> = std::collections::BTreeMap::new();
+        for row in dataset.rows() {
+            let entry = worst.entry(row.point_index).or_insert((None, false));
+            match row.estimated_error_db {
+                Some(e) => entry.0 = Some(entry.0.map_or(e, |w: f64| w.max(e))),
+                None => entry.1 = true,
+            }
+        }
+        let mut selection =
+            PointSelection { max_error_db, kept: Vec::new(), excluded: Vec::new(), without_estimate: 0 };
+        for (point, (error_db, unestimated)) in worst {
+            match error_db {
+                Some(e) if e > max_error_db => selection.excluded.push((point, e)),
+                _ => {
+                    selection.kept.push(point);
+                    selection.without_estimate += usize::from(unestimated);
+                }
+            }
+        }
+        if selection.kept.is_empty() {
+            return Err(ControlError::Empty { input: "the points within the estimated-error limit" });
+        }
+        Ok(selection)
+    }
+
+    /// Refuses a pixel whose point (from [`snap_pixel`]) was left out.
+    ///
+    /// # Errors
+    /// [`ControlError::PixelExcluded`] naming the point and its estimated error.
+    pub fn check_pixel(&self, x_m: f64, y_m: f64, point_index: u32) -> Result<(), ControlError> {
+        match self.excluded.binary_search_by_key(&point_index, |e| e.0) {
+            Ok(i) => Err(ControlError::PixelExcluded {
+                x_m,
+                y_m,
+                point_index,
+                error_db: self.excluded[i].1,
+                max_error_db: self.max_error_db,
+            }),
+            Err(_) => Ok(()),
+        }
+    }
 }

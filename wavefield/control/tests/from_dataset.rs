@@ -3,6 +3,7 @@
 
 #![allow(clippy::unwrap_used)] // tests may unwrap
 
+use metaplate_control::pixels::PointSelection;
 use metaplate_control::{ControlError, PropagationMatrices};
 use metaplate_dsp::fft;
 use metaplate_store::{Dataset, DatasetMeta, DatasetWriter, GridSpec, IfExists, IrMeta, IrRecord, SceneId};
@@ -37,7 +38,14 @@ fn write_dataset(dir: &std::path::Path) -> Dataset {
         let mut records = Vec::new();
         for &(ix, iy) in batch {
             for actuator in [0, 2, 5] {
-                let meta = IrMeta::at_grid(&grid, ix, iy, actuator, FS_HZ).unwrap();
+                let mut meta = IrMeta::at_grid(&grid, ix, iy, actuator, FS_HZ).unwrap();
+                // Estimated errors: point 0 (-40 dB), point 7 with one poor row (-12 dB on actuator 5), point 9 none.
+                meta.estimated_error_db = match (meta.point_index, actuator) {
+                    (0, _) => Some(-40.0),
+                    (7, 5) => Some(-12.0),
+                    (7, _) => Some(-38.0),
+                    _ => None,
+                };
                 records.push(IrRecord { ir: ir(meta.point_index, actuator), meta });
             }
         }
@@ -137,4 +145,31 @@ fn pixels_snap_to_the_nearest_measured_point_or_are_refused_by_name() {
     assert!((distance_mm - 5.0).abs() < 1e-9 && step_mm == (5.0, 5.0), "{distance_mm} {step_mm:?}");
     assert!((nearest_m.0 - 0.015).abs() < 1e-12 && (nearest_m.1 - 0.005).abs() < 1e-12, "{nearest_m:?}");
     assert!(err.to_string().contains("pixel (0.015, 0.01) is 5.0 mm from the nearest measured point"), "{err}");
+}
+
+#[test]
+fn points_are_selected_by_their_worst_rows_estimated_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = write_dataset(dir.path());
+    // -20 dB: point 7's worst row (-12 dB) is out; point 9 has no estimate and is kept, counted as such.
+    let s = PointSelection::by_estimated_error(&dataset, -20.0).unwrap();
+    assert_eq!(s.kept, [0, 9]);
+    assert_eq!(s.excluded, [(7, -12.0)]);
+    assert_eq!(s.without_estimate, 1);
+    // The limit is inclusive, and the extremes keep everything or refuse to keep nothing.
+    assert_eq!(PointSelection::by_estimated_error(&dataset, -12.0).unwrap().kept, [0, 7, 9]);
+    assert_eq!(PointSelection::by_estimated_error(&dataset, f64::INFINITY).unwrap().excluded, []);
+    assert_eq!(PointSelection::by_estimated_error(&dataset, f64::NEG_INFINITY).unwrap().kept, [9]);
+    assert!(matches!(
+        PointSelection::by_estimated_error(&dataset, f64::NAN),
+        Err(ControlError::InvalidParameter { .. })
+    ));
+    // A pixel on an excluded point is refused by name; elsewhere it passes.
+    let err = s.check_pixel(0.015, 0.005, 7).unwrap_err();
+    assert!(matches!(err, ControlError::PixelExcluded { point_index: 7, .. }), "{err}");
+    assert!(err.to_string().contains("-12.0 dB") && err.to_string().contains("-20.0 dB"), "{err}");
+    assert!(s.check_pixel(0.0, 0.0, 0).is_ok());
+    // G over the kept points only.
+    let g = PropagationMatrices::from_dataset(&dataset, (1000.0, 5000.0), Some(&s.kept)).unwrap();
+    assert_eq!(g.points(), [0, 9]);
 }

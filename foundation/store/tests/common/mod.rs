@@ -36,6 +36,7 @@ pub fn records(points: &[(u32, u32)], actuators: &[u16], len: usize) -> Vec<IrRe
             let mut meta = IrMeta::at_grid(&grid, ix, iy, actuator, 24_000.0).unwrap();
             if (ix + iy) % 2 == 0 {
                 meta.snr_db = Some(30.0 + f64::from(ix));
+                meta.estimated_error_db = Some(-30.0 - f64::from(ix));
                 meta.status = Some(Status::Valid);
                 meta.retries = Some(iy);
                 meta.measured_at_unix_us = Some(1_767_225_600_000_000 + i64::from(ix));

@@ -3,7 +3,7 @@
 //! with the scan's retry policy.
 
 use metaplate_dsp::deconv::DeconvConfig;
-use metaplate_dsp::excitation::ExcitationProtocol;
+use metaplate_dsp::excitation::{Adaptive, AdaptiveTarget, ExcitationProtocol};
 
 use crate::drive::{AudioPlayback, DrivePlayback};
 use crate::engine::aim::Aimed;
@@ -12,8 +12,8 @@ use crate::engine::session::Instruments;
 use crate::error::RecipeError;
 use crate::plans::calibrate::Calibration;
 use crate::plans::scan::GridScan;
-use crate::plans::scan::points::Problem;
-use crate::plans::scan::processing::{Channel, Job, ScanProcessor, Work};
+use crate::plans::scan::points::{Outcome, Problem};
+use crate::plans::scan::processing::{Channel, Job, ScanProcessor, Work, gated, in_units};
 use crate::plans::scan::simultaneous::{Averager, Simultaneous};
 
 impl GridScan<'_> {
@@ -34,6 +34,16 @@ impl GridScan<'_> {
             };
             return Ok(Some(Job { point, aimed, work }));
         }
+        if let Some(adaptive) = self.cfg.protocol.adaptive {
+            let mut outcomes = Vec::with_capacity(pending.len());
+            for &actuator in pending {
+                match self.record_rounds(point, actuator, adaptive, processor, lab)? {
+                    Some(outcome) => outcomes.push(outcome),
+                    None => return Ok(None),
+                }
+            }
+            return Ok(Some(Job { point, aimed, work: Work::Done(outcomes) }));
+        }
         let mut channels = Vec::with_capacity(pending.len());
         for &actuator in pending {
             let buffers = self.playbacks[actuator].buffers();
@@ -45,6 +55,55 @@ impl GridScan<'_> {
             channels.push(Channel { actuator, acquisition: acquired.acquisition, problem });
         }
         Ok(Some(Job { point, aimed, work: Work::Channels(channels) }))
+    }
+
+    /// Plays `actuator` alone at `point` (the beam already there), shot after shot, decoding each at once and
+    /// averaging, until the protocol's adaptive target is reached or its rounds are spent (a sequential adaptive
+    /// protocol); `None` if abandoned on request. A shot with an acquisition problem ends the rounds: the row is
+    /// settled on that shot alone, with its problem (so it is deferred and measured again).
+    fn record_rounds(
+        &mut self,
+        point: usize,
+        actuator: usize,
+        adaptive: Adaptive,
+        processor: &ScanProcessor,
+        lab: &mut Lab<'_, '_>,
+    ) -> Result<Option<Outcome>, RecipeError> {
+        let (gates, fs) = (&processor.gates, processor.decoder.sample_rate_hz());
+        let mut rounds = Averager::new(1);
+        loop {
+            let buffers = self.playbacks[actuator].buffers();
+            let Some(acquired) = lab.acquire(&buffers, self.record, point)? else {
+                return Ok(None);
+            };
+            // Extra rounds are the protocol's, not retries: only the first round counts as the row's acquisition.
+            self.book.count_acquisitions(point, actuator, acquired.attempts - 1 + u32::from(rounds.count == 0));
+            let acq = &acquired.acquisition;
+            let r = match processor.decoder.decode_shot(&acq.recording.velocity_v, &acq.recording.loopback_v) {
+                Ok(r) => in_units(r, acq.scale.m_s_per_v * gates.volts_per_fs),
+                Err(e) => return Ok(Some((actuator, None, Some(Problem::Processing(e.to_string()))))),
+            };
+            if let Some(problem) = acquired.problem.map(Problem::from) {
+                return Ok(Some(gated(actuator, r, Some(problem), gates, fs)));
+            }
+            rounds.add(std::slice::from_ref(&r));
+            let (snr, error) = (rounds.snr_db(&[0])[0], rounds.error_db(&[0], fs)[0]);
+            let reached = adaptive.target.reached(snr, error);
+            if reached || rounds.count >= adaptive.max_rounds {
+                let Some(Some(mean)) = rounds.averaged().into_iter().next() else {
+                    return Err(RecipeError::Internal("no averaged response".into()));
+                };
+                let mut outcome = gated(actuator, mean, None, gates, fs);
+                if outcome.2.is_none() && !reached {
+                    let value_db = match adaptive.target {
+                        AdaptiveTarget::SnrDb(_) => snr,
+                        AdaptiveTarget::ErrorDb(_) => error,
+                    };
+                    outcome.2 = Some(Problem::Unreached { target: adaptive.target, value_db, rounds: rounds.count });
+                }
+                return Ok(Some(outcome));
+            }
+        }
     }
 
     /// Plays every shot of a simultaneous protocol at `point` (the beam already there), round after round for an
@@ -94,17 +153,19 @@ impl GridScan<'_> {
                 Err(problem) => return Ok(Some(Work::Done(sim.outcomes(pending, Err(problem), None, gates)))),
             }
             let snrs = rounds.snr_db(pending);
-            let reached = snrs.iter().all(|s| s.is_some_and(|s| s >= adaptive.target_snr_db));
+            let errors = rounds.error_db(pending, sim.sample_rate_hz);
+            let target = adaptive.target;
+            let reached = snrs.iter().zip(&errors).all(|(&s, &e)| target.reached(s, e));
             if reached || rounds.count >= max_rounds {
                 let averaged = rounds.averaged();
                 let mut outcomes = sim.outcomes(pending, Ok(averaged), None, gates);
-                for (outcome, snr) in outcomes.iter_mut().zip(snrs) {
-                    if outcome.2.is_none() && snr.is_none_or(|s| s < adaptive.target_snr_db) {
-                        outcome.2 = Some(Problem::Unreached {
-                            snr_db: snr,
-                            target_db: adaptive.target_snr_db,
-                            rounds: rounds.count,
-                        });
+                for ((outcome, snr), error) in outcomes.iter_mut().zip(snrs).zip(errors) {
+                    if outcome.2.is_none() && !target.reached(snr, error) {
+                        let value_db = match target {
+                            AdaptiveTarget::SnrDb(_) => snr,
+                            AdaptiveTarget::ErrorDb(_) => error,
+                        };
+                        outcome.2 = Some(Problem::Unreached { target, value_db, rounds: rounds.count });
                     }
                 }
                 return Ok(Some(Work::Done(outcomes)));

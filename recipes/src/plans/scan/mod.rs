@@ -24,7 +24,7 @@ use std::collections::{BTreeMap, BTreeSet, VecDeque};
 use metaplate_core::grid::GridSpec;
 use metaplate_core::rig::Rig;
 use metaplate_dsp::deconv::DeconvConfig;
-use metaplate_dsp::excitation::{ExcitationProtocol, Scheme};
+use metaplate_dsp::excitation::{AdaptiveTarget, ExcitationProtocol, Scheme};
 use metaplate_dsp::stats::median;
 use metaplate_store::{DatasetDescription, DatasetMeta, Status};
 use serde_json::{Map, Value, json};
@@ -134,7 +134,11 @@ impl ScanConfig {
                     Scheme::Hadamard => json!({ "kind": "hadamard" }),
                     Scheme::Interleaved { slot_s } => json!({ "kind": "interleaved", "slot_s": slot_s }),
                 },
-                "adaptive": p.adaptive.map(|a| json!({ "target_snr_db": a.target_snr_db, "max_rounds": a.max_rounds })),
+                // An SNR target keeps the key it always had, so existing datasets' configurations are unchanged.
+                "adaptive": p.adaptive.map(|a| match a.target {
+                    AdaptiveTarget::SnrDb(db) => json!({ "target_snr_db": db, "max_rounds": a.max_rounds }),
+                    AdaptiveTarget::ErrorDb(db) => json!({ "target_error_db": db, "max_rounds": a.max_rounds }),
+                }),
                 "sweep": { "f1_hz": s.f1_hz, "f2_hz": s.f2_hz, "duration_s": s.duration_s, "amplitude": s.amplitude,
                            "fade_in_s": s.fade_in_s, "fade_out_s": s.fade_out_s, "kind": format!("{:?}", s.kind) },
                 "deconv": { "ir_len": d.ir_len, "pre_samples": d.pre_samples, "regularisation": d.regularisation,
@@ -381,6 +385,7 @@ impl Plan for GridScan<'_> {
 mod tests {
     use super::*;
     use crate::plans::scan::points::Problem;
+    use crate::plans::scan::points::tests::measured;
 
     const HERE: Aimed = Aimed { x_m: 0.0, y_m: 0.0, level: 1.0 };
 
@@ -402,8 +407,8 @@ mod tests {
         assert_eq!(step_unit(scan.next(false)), (1, 0, vec![0, 1]));
         // The next path point needs no result: it is handed out while point 1 is in flight.
         assert_eq!(step_unit(scan.next(true)), (2, 0, vec![0, 1]));
-        let low = |a| (a, Some((vec![0.1], Some(5.0))), Some(Problem::LowSnr(5.0)));
-        let good = |a| (a, Some((vec![1.0], Some(40.0))), None);
+        let low = |a| (a, Some(measured(0.1, 5.0)), Some(Problem::LowSnr(5.0)));
+        let good = |a| (a, Some(measured(1.0, 40.0)), None);
         let verdict = scan.settle(Processed { point: 1, aimed: HERE, outcomes: vec![good(0), low(1)] }).unwrap();
         assert!(matches!(verdict, Verdict::Continue { retry: Some((1, 1, _)) }), "{verdict:?}");
         // Deferred point 1 waits while point 2 is in flight (2 may be deferred too, and re-visits keep order).

@@ -5,6 +5,7 @@
 use std::collections::{BTreeMap, VecDeque};
 
 use metaplate_core::grid::GridSpec;
+use metaplate_dsp::excitation::AdaptiveTarget;
 use metaplate_store::{IrMeta, IrRecord, Status};
 
 use crate::engine::acquire::AcquisitionProblem;
@@ -19,10 +20,11 @@ pub(crate) enum Problem {
     Processing(String),
     LowSnr(f64),
     Drift(f64),
-    /// An adaptive protocol's target SNR, not reached within its rounds (final: not deferred).
+    /// An adaptive protocol's target (SNR or estimated error), not reached within its rounds (final: not
+    /// deferred); `value_db` is where the row ended.
     Unreached {
-        snr_db: Option<f64>,
-        target_db: f64,
+        target: AdaptiveTarget,
+        value_db: Option<f64>,
         rounds: usize,
     },
 }
@@ -49,9 +51,11 @@ impl Problem {
             Problem::Processing(e) => format!("processing failed: {e}"),
             Problem::LowSnr(snr) => format!("SNR {snr:.1} dB below the limit"),
             Problem::Drift(ppm) => format!("clock drift {ppm:.0} ppm beyond the limit"),
-            Problem::Unreached { snr_db, target_db, rounds } => format!(
-                "SNR {} below the adaptive target {target_db:.1} dB after {rounds} rounds",
-                snr_db.map_or("unknown".to_string(), |s| format!("{s:.1} dB"))
+            Problem::Unreached { target, value_db, rounds } => format!(
+                "{} {} short of the adaptive target {:.1} dB after {rounds} rounds",
+                target.quantity(),
+                value_db.map_or("unknown".to_string(), |v| format!("{v:.1} dB")),
+                target.db()
             ),
         }
     }
@@ -62,8 +66,8 @@ impl Problem {
 pub(crate) struct Row {
     /// Acquisitions made for the row over every visit (`retries` is one less).
     pub acquisitions: u32,
-    /// Best result so far: IR (m/s per full scale), SNR, where.
-    pub result: Option<(Vec<f64>, Option<f64>, Aimed)>,
+    /// Best result so far, and where.
+    pub result: Option<(Measured, Aimed)>,
     /// The last visit's problem, if any.
     pub problem: Option<Problem>,
     /// Settled: nothing more to measure for it.
@@ -86,8 +90,20 @@ impl From<AcquisitionProblem> for Problem {
     }
 }
 
-/// One processed channel: actuator, response (m/s per full scale) and SNR when processing succeeded, problem.
-pub(crate) type Outcome = (usize, Option<(Vec<f64>, Option<f64>)>, Option<Problem>);
+/// A response as processed: what a row commits when it is the best of its visits.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Measured {
+    /// The impulse response, m/s per full scale.
+    pub ir: Vec<f64>,
+    /// SNR from the spread of repetitions, dB.
+    pub snr_db: Option<f64>,
+    /// The response's estimated error over the error band, dB, from the same spread
+    /// (`ChannelResult::estimated_error_db`).
+    pub error_db: Option<f64>,
+}
+
+/// One processed channel: actuator, the response when processing succeeded, problem.
+pub(crate) type Outcome = (usize, Option<Measured>, Option<Problem>);
 
 /// What settling a processed visit decided for the point.
 #[derive(Debug, Clone)]
@@ -157,8 +173,8 @@ impl PointBook {
             let Some(row) = state.rows.get_mut(actuator) else {
                 return Err(RecipeError::Internal(format!("an outcome for actuator {actuator} of {}", self.actuators)));
             };
-            if let Some((ir, snr)) = result {
-                row.result = Some((ir, snr, aimed));
+            if let Some(measured) = result {
+                row.result = Some((measured, aimed));
             }
             row.done = problem.as_ref().is_none_or(Problem::is_final);
             row.problem = problem;
@@ -207,17 +223,19 @@ pub(crate) fn point_records(
         .enumerate()
         .map(|(actuator, row)| {
             let status = row_status(&row);
-            let (ir, snr_db, x_m, y_m) = match row.result {
-                Some((ir, snr, aimed)) => (ir, snr, aimed.x_m, aimed.y_m),
+            let (measured, x_m, y_m) = match row.result {
+                Some((measured, aimed)) => (measured, aimed.x_m, aimed.y_m),
                 None => {
                     let (x, y) = grid.position_m(point);
-                    (vec![0.0; ir_len], None, x, y)
+                    (Measured { ir: vec![0.0; ir_len], snr_db: None, error_db: None }, x, y)
                 }
             };
+            let Measured { ir, snr_db, error_db } = measured;
             let meta = IrMeta {
                 x_m,
                 y_m,
                 snr_db,
+                estimated_error_db: error_db,
                 status: Some(status),
                 retries: Some(row.acquisitions.saturating_sub(1)),
                 measured_at_unix_us: Some(measured_at_unix_us),
@@ -240,17 +258,22 @@ pub(crate) fn severity(status: Status) -> u8 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     const HERE: Aimed = Aimed { x_m: 0.0, y_m: 0.0, level: 1.0 };
 
+    /// A one-sample response with this SNR, its estimated error the SNR's opposite.
+    pub(crate) fn measured(sample: f64, snr_db: f64) -> Measured {
+        Measured { ir: vec![sample], snr_db: Some(snr_db), error_db: Some(-snr_db) }
+    }
+
     fn good(actuator: usize) -> Outcome {
-        (actuator, Some((vec![1.0], Some(40.0))), None)
+        (actuator, Some(measured(1.0, 40.0)), None)
     }
 
     fn low_snr(actuator: usize) -> Outcome {
-        (actuator, Some((vec![0.5], Some(10.0))), Some(Problem::LowSnr(10.0)))
+        (actuator, Some(measured(0.5, 10.0)), Some(Problem::LowSnr(10.0)))
     }
 
     fn visit_all(book: &mut PointBook, point: usize) -> Vec<usize> {
@@ -308,8 +331,8 @@ mod tests {
     fn a_final_problem_is_not_deferred() {
         let mut book = PointBook::new(1, 2);
         visit_all(&mut book, 0);
-        let unreached = Problem::Unreached { snr_db: Some(20.0), target_db: 30.0, rounds: 8 };
-        let settled = book.settle(0, HERE, vec![(0, Some((vec![1.0], Some(20.0))), Some(unreached))]).unwrap();
+        let unreached = Problem::Unreached { target: AdaptiveTarget::SnrDb(30.0), value_db: Some(20.0), rounds: 8 };
+        let settled = book.settle(0, HERE, vec![(0, Some(measured(1.0, 20.0)), Some(unreached))]).unwrap();
         let Settled::Commit(rows) = settled else { panic!() };
         assert_eq!(row_status(&rows[0]), Status::Failed);
     }
@@ -318,7 +341,7 @@ mod tests {
     fn clipping_is_overrange_and_a_point_never_visited_is_an_internal_error() {
         let mut book = PointBook::new(1, 0);
         visit_all(&mut book, 0);
-        let clipped = (0, Some((vec![1.0], Some(40.0))), Some(Problem::from(AcquisitionProblem::Clipped)));
+        let clipped = (0, Some(measured(1.0, 40.0)), Some(Problem::from(AcquisitionProblem::Clipped)));
         let Settled::Commit(rows) = book.settle(0, HERE, vec![clipped]).unwrap() else { panic!() };
         assert_eq!(row_status(&rows[0]), Status::Overrange);
         assert!(matches!(book.settle(9, HERE, vec![]), Err(RecipeError::Internal(_))));

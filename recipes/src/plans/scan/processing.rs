@@ -2,11 +2,12 @@
 //! protocol's decode) and the quality gates, into outcomes the plan settles.
 
 use metaplate_dsp::excitation::Decoder;
+use metaplate_dsp::pipeline::ChannelResult;
 
 use crate::engine::aim::Aimed;
 use crate::engine::plan::Processor;
 use crate::engine::session::Acquisition;
-use crate::plans::scan::points::{Outcome, Problem};
+use crate::plans::scan::points::{Measured, Outcome, Problem};
 use crate::plans::scan::simultaneous::Simultaneous;
 
 /// One acquisition sent for processing.
@@ -38,7 +39,7 @@ pub(crate) enum Work {
 pub(crate) struct Processed {
     pub point: usize,
     pub aimed: Aimed,
-    /// Per channel: actuator, response (m/s per full scale) and SNR when processing succeeded, problem if any.
+    /// Per channel: actuator, the response when processing succeeded, problem if any.
     pub outcomes: Vec<Outcome>,
 }
 
@@ -91,23 +92,39 @@ fn process_channels(channels: Vec<Channel>, decoder: &Decoder, gates: &Gates) ->
         .into_iter()
         .map(|ch| {
             let acq = &ch.acquisition;
-            // The response is kept even when a gate fails: it is committed if no later visit does better.
-            let (result, gate) = match decoder.decode_shot(&acq.recording.velocity_v, &acq.recording.loopback_v) {
-                Err(e) => (None, Some(Problem::Processing(e.to_string()))),
+            match decoder.decode_shot(&acq.recording.velocity_v, &acq.recording.loopback_v) {
+                Err(e) => (ch.actuator, None, ch.problem.or(Some(Problem::Processing(e.to_string())))),
                 Ok(r) => {
-                    let to_units = acq.scale.m_s_per_v * gates.volts_per_fs;
-                    let ir: Vec<f64> = r.ir.iter().map(|v| v * to_units).collect();
-                    let gate = if r.drift_ppm.abs() > gates.max_drift_ppm {
-                        Some(Problem::Drift(r.drift_ppm))
-                    } else {
-                        r.snr_db.filter(|s| *s < gates.min_snr_db).map(Problem::LowSnr)
-                    };
-                    (Some((ir, r.snr_db)), gate)
+                    let r = in_units(r, acq.scale.m_s_per_v * gates.volts_per_fs);
+                    gated(ch.actuator, r, ch.problem, gates, decoder.sample_rate_hz())
                 }
-            };
-            // An acquisition problem (clipping, a gap) explains a gate failure better than the gate itself.
-            let problem = ch.problem.or(gate);
-            (ch.actuator, result, problem)
+            }
         })
         .collect()
+}
+
+/// `r` with its response (and its noise) multiplied by `to_units`.
+pub(crate) fn in_units(mut r: ChannelResult, to_units: f64) -> ChannelResult {
+    r.ir.iter_mut().for_each(|v| *v *= to_units);
+    r.noise_energy = r.noise_energy.map(|e| e * to_units * to_units);
+    r
+}
+
+/// The outcome of `actuator`'s decoded response `r` (m/s per full scale, sampled at `sample_rate_hz`): the gates
+/// (drift, then SNR) decide its problem, unless an acquisition `problem` (clipping, a gap) explains it better. The
+/// response is kept even when a gate fails: it is committed if no later visit does better.
+pub(crate) fn gated(
+    actuator: usize,
+    r: ChannelResult,
+    problem: Option<Problem>,
+    gates: &Gates,
+    sample_rate_hz: f64,
+) -> Outcome {
+    let gate = if r.drift_ppm.abs() > gates.max_drift_ppm {
+        Some(Problem::Drift(r.drift_ppm))
+    } else {
+        r.snr_db.filter(|s| *s < gates.min_snr_db).map(Problem::LowSnr)
+    };
+    let error_db = r.estimated_error_db(sample_rate_hz);
+    (actuator, Some(Measured { ir: r.ir, snr_db: r.snr_db, error_db }), problem.or(gate))
 }

@@ -1,6 +1,7 @@
 //! A simultaneous protocol (every actuator at once: Hadamard, interleaved) ready to play and decode, and the
 //! coherent average of an adaptive protocol's rounds.
 
+use metaplate_dsp::accuracy::estimated_error_db;
 use metaplate_dsp::deconv::DeconvConfig;
 use metaplate_dsp::excitation::{Adaptive, Decoder, ExcitationProtocol};
 use metaplate_dsp::pipeline::ChannelResult;
@@ -10,12 +11,14 @@ use crate::engine::session::{Acquisition, Instruments};
 use crate::error::RecipeError;
 use crate::plans::calibrate::Calibration;
 use crate::plans::scan::points::{Outcome, Problem};
-use crate::plans::scan::processing::Gates;
+use crate::plans::scan::processing::{Gates, gated, in_units};
 
 /// A simultaneous protocol ready to play and decode.
 pub(crate) struct Simultaneous {
     pub playback: SimultaneousPlayback,
     pub adaptive: Option<Adaptive>,
+    /// The DAQ's rate, Hz: the responses' sample rate.
+    pub sample_rate_hz: f64,
 }
 
 impl Simultaneous {
@@ -32,7 +35,7 @@ impl Simultaneous {
         // The tail holds the last response (ir_len) and the filter's own length, as in the sequential playback.
         let filters = calibration.map(|c| c.filters.as_slice());
         let playback = SimultaneousPlayback::new(protocol, wiring, fs, deconv.ir_len + fir_len, filters)?;
-        Ok(Self { playback, adaptive: protocol.adaptive })
+        Ok(Self { playback, adaptive: protocol.adaptive, sample_rate_hz: fs })
     }
 
     /// Every actuator's response (m/s per full scale of its compensated drive) and SNR from one round of shots,
@@ -53,11 +56,8 @@ impl Simultaneous {
             .zip(acquisitions)
             .map(|(v, a)| (v.as_slice(), a.recording.loopback_v.as_slice()))
             .collect();
-        let mut results = decoder.decode(&pairs).map_err(|e| Problem::Processing(e.to_string()))?;
-        for (r, gain) in results.iter_mut().zip(&self.playback.response_gain) {
-            r.ir.iter_mut().for_each(|v| *v *= gain);
-        }
-        Ok(results)
+        let results = decoder.decode(&pairs).map_err(|e| Problem::Processing(e.to_string()))?;
+        Ok(results.into_iter().zip(&self.playback.response_gain).map(|(r, &gain)| in_units(r, gain)).collect())
     }
 
     /// Outcomes of the pending actuators from decoded results (or why there are none), gated like sequential ones;
@@ -75,40 +75,42 @@ impl Simultaneous {
                 Err(e) => (a, None, problem.clone().or_else(|| Some(e.clone()))),
                 Ok(results) => match results.get(a).cloned().flatten() {
                     None => (a, None, problem.clone().or(Some(Problem::Processing(format!("no response {a}"))))),
-                    Some(r) => {
-                        let gate = if r.drift_ppm.abs() > gates.max_drift_ppm {
-                            Some(Problem::Drift(r.drift_ppm))
-                        } else {
-                            r.snr_db.filter(|s| *s < gates.min_snr_db).map(Problem::LowSnr)
-                        };
-                        (a, Some((r.ir, r.snr_db)), problem.clone().or(gate))
-                    }
+                    Some(r) => gated(a, r, problem.clone(), gates, self.sample_rate_hz),
                 },
             })
             .collect()
     }
 }
 
-/// Coherent average of adaptive rounds, with the noise of the average from each round's SNR.
+/// Coherent average of adaptive rounds, with the noise of the average from each round's SNR, and its noise within
+/// the error band from each round's (the row's error estimate).
 pub(crate) struct Averager {
     pub count: usize,
     /// Per actuator: sum of the responses, and sum of the rounds' noise energies (`None` once a round had none).
     sums: Vec<(Vec<f64>, Option<f64>)>,
+    /// Per actuator: sum of the rounds' noise energies within the error band (`None` once a round had none).
+    band_noise: Vec<Option<f64>>,
     drift_ppm: f64,
 }
 
 impl Averager {
     pub(crate) fn new(actuators: usize) -> Self {
-        Self { count: 0, sums: vec![(Vec::new(), Some(0.0)); actuators], drift_ppm: 0.0 }
+        Self {
+            count: 0,
+            sums: vec![(Vec::new(), Some(0.0)); actuators],
+            band_noise: vec![Some(0.0); actuators],
+            drift_ppm: 0.0,
+        }
     }
 
     pub(crate) fn add(&mut self, results: &[ChannelResult]) {
         self.count += 1;
-        for ((sum, noise), r) in self.sums.iter_mut().zip(results) {
+        for (((sum, noise), band_noise), r) in self.sums.iter_mut().zip(&mut self.band_noise).zip(results) {
             sum.resize(r.ir.len(), 0.0);
             sum.iter_mut().zip(&r.ir).for_each(|(s, v)| *s += v);
             // A round's noise energy from its SNR: energy / 10^(snr/10).
             *noise = noise.zip(r.snr_db).map(|(n, snr)| n + energy(&r.ir) / 10f64.powf(snr / 10.0));
+            *band_noise = band_noise.zip(r.noise_energy).map(|(n, e)| n + e);
         }
         self.drift_ppm = self.drift_ppm.max(results.iter().fold(0.0f64, |m, r| m.max(r.drift_ppm.abs())));
     }
@@ -122,7 +124,25 @@ impl Averager {
                 let (sum, _) = &self.sums[a];
                 let ir: Vec<f64> = sum.iter().map(|v| v / n).collect();
                 let snr_db = self.snr_db(&[a]).into_iter().next().flatten();
-                Some(ChannelResult { ir, snr_db, drift_ppm: self.drift_ppm, latency_samples: 0.0 })
+                // Independent rounds: the mean's noise is their total over the count squared.
+                let noise_energy = self.band_noise[a].map(|e| e / (n * n));
+                Some(ChannelResult { ir, snr_db, drift_ppm: self.drift_ppm, latency_samples: 0.0, noise_energy })
+            })
+            .collect()
+    }
+
+    /// Estimated error of the average for each of `actuators` over the error band, dB
+    /// ([`metaplate_dsp::accuracy::estimated_error_db`] of the averaged response and its noise); `None` where
+    /// unknown.
+    pub(crate) fn error_db(&self, actuators: &[usize], sample_rate_hz: f64) -> Vec<Option<f64>> {
+        let n = self.count.max(1) as f64;
+        actuators
+            .iter()
+            .map(|&a| {
+                let (sum, _) = self.sums.get(a)?;
+                let noise = (*self.band_noise.get(a)?)? / (n * n);
+                let mean: Vec<f64> = sum.iter().map(|v| v / n).collect();
+                estimated_error_db(&mean, noise, sample_rate_hz).ok()
             })
             .collect()
     }
