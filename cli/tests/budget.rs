@@ -76,3 +76,43 @@ fn budget_json_has_the_floor_the_terms_and_all_on() {
     assert!(v["aliasing"].is_null() && v["floor"]["periodic_truth"].is_null(), "{}", v["aliasing"]);
     println!("budget took {:.1} s", started.elapsed().as_secs_f64());
 }
+
+#[test]
+fn the_metamaterial_plates_processing_floor_is_under_minus_80_db() {
+    // The sequential protocol (the paper's scheme) on the metamaterial plate, Green's functions cached by the other
+    // 3 x 2, seed 5 runs. `quick` rather than `paper`: the same linear sweep and deconvolution, 1 s x 2 periods
+    // instead of 3 s x 5, so 2 s of the test profile instead of 14 s, and the same floor (-97.3 and -97.2 dB).
+    let out = common::metaplate(&[
+        "budget",
+        "--scene",
+        "metamaterial",
+        "--grid",
+        "3x2",
+        "--seed",
+        "5",
+        "--protocol",
+        "quick",
+        "--only",
+        "floor",
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let median = |x: &Value| x["median_db"].as_f64().unwrap();
+    // Issue 20's bound, against the truth as the window keeps it (-97 dB measured: the linear sweep's
+    // regularisation).
+    let floor = median(&v["floor"]);
+    assert!(floor < -80.0, "floor {floor} dB against the windowed truth");
+    // Against the full truth the plate's ring-down past the window is added: the truncation (-46 dB), which with the
+    // floor accounts for the difference row by row (0.005 dB p95 measured; 0.1 dB is far under the 3 dB a leak of
+    // one into the other would show where they are equal).
+    let (full, truncation) = (median(&v["floor"]["full_truth"]), median(&v["truncation"]));
+    assert!(truncation > floor + 30.0 && (full - truncation).abs() < 0.1, "{full} / {truncation} dB");
+    let split = &v["additivity"]["truncation_split_db"];
+    assert!(split["p95_db"].as_f64().is_some_and(|d| d < 0.1), "{split}");
+    // Two periods of 1 s: the period wraps the 0.5 s response's tail by under -100 dB (-123 dB measured), and the
+    // floor against the folded truth is the same.
+    let aliasing = median(&v["aliasing"]);
+    assert!(aliasing < -100.0, "aliasing {aliasing} dB");
+    assert!((median(&v["floor"]["periodic_truth"]) - floor).abs() < 1.0, "{}", v["floor"]);
+}
