@@ -79,7 +79,7 @@ pub fn time_zero_first(ir: &[f64], pre_samples: usize) -> Vec<f64> {
 
 /// The filter's frequency response at the bins of an `n`-point DFT: its taps folded modulo `n` (exact: at those
 /// frequencies tap `m` and tap `m + n` turn by the same phase), then one FFT.
-fn filter_response_at_bins(filter: &KirkebyFilter, n: usize) -> Result<Vec<Complex64>, LabError> {
+pub(crate) fn filter_response_at_bins(filter: &KirkebyFilter, n: usize) -> Result<Vec<Complex64>, LabError> {
     let mut folded = vec![0.0; n];
     for (m, h) in filter.taps.iter().enumerate() {
         folded[m % n] += h;

@@ -101,6 +101,7 @@ mod direct_daq;
 mod links;
 pub mod session;
 mod truth;
+pub mod windowed_truth;
 
 pub use accuracy::{ERROR_BAND_HZ, time_zero_first};
 
@@ -500,11 +501,7 @@ impl MockLab {
     /// frequency out of range.
     pub fn true_response(&self, point: usize, actuator: usize, freqs_hz: &[f64]) -> Result<Vec<Complex64>, LabError> {
         let greens = &self.plate.greens;
-        let point_k = greens
-            .points
-            .iter()
-            .position(|&p| p == point)
-            .ok_or(LabError::NotPrepared { what: format!("grid point {point}") })?;
+        let point_k = self.prepared_point(point)?;
         let ir = greens.ir(point_k, actuator).ok_or(LabError::NotPrepared { what: format!("actuator {actuator}") })?;
         let coil = self.plate.coils.get(actuator).ok_or(LabError::NotPrepared { what: format!("coil {actuator}") })?;
         let nyquist = greens.sample_rate_hz / 2.0;
@@ -531,6 +528,21 @@ impl MockLab {
                 Ok(sum * coil.frequency_response(f))
             })
             .collect()
+    }
+}
+
+impl MockLab {
+    /// Where grid point `point` is among the prepared points (its index in the Green's functions).
+    ///
+    /// # Errors
+    /// [`LabError::NotPrepared`] for a point the lab did not prepare.
+    fn prepared_point(&self, point: usize) -> Result<usize, LabError> {
+        self.plate
+            .greens
+            .points
+            .iter()
+            .position(|&p| p == point)
+            .ok_or(LabError::NotPrepared { what: format!("grid point {point}") })
     }
 }
 

@@ -47,11 +47,7 @@ impl MockLab {
         if drives.iter().flatten().any(|v| !v.is_finite()) {
             return Err(invalid("a drive holds a non-finite sample".into()));
         }
-        let point_k = greens
-            .points
-            .iter()
-            .position(|&p| p == point)
-            .ok_or(LabError::NotPrepared { what: format!("grid point {point}") })?;
+        let point_k = self.prepared_point(point)?;
         let out_len = len + greens.ir_len - 1;
         // The coils are IIR filters, applied here by their response at the transform's bins: a circular convolution
         // whose tail wraps. Twice the length keeps the wrap off the samples returned; what the coils still ring
