@@ -37,20 +37,15 @@ pub fn smoothed_flatness(
     band_hz: (f64, f64),
     fraction: f64,
 ) -> Result<Flatness, DspError> {
-    let levels = metaplate_dsp::smooth::smoothed_levels_db(ir, sample_rate_hz, fraction, band_hz)?;
-    let mut levels_db: Vec<f64> = levels.iter().map(|(_, l)| *l).collect();
-    // Not empty: smoothed_levels_db refuses a band without bins.
-    let median_db = metaplate_dsp::stats::median(&mut levels_db).unwrap_or(0.0);
-    let (min, max) = levels_db.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
-    Ok(Flatness { median_db, min_db: min - median_db, max_db: max - median_db })
+    Ok(of_levels(&metaplate_dsp::smooth::smoothed_levels_db(ir, sample_rate_hz, fraction, band_hz)?))
 }
 
 /// Flatness of `ir` (sampled at `sample_rate_hz`) over `band_hz` as others would report it: its magnitude spectrum
 /// (an FFT of its own length) smoothed by pyfar's standard fractional-octave smoothing
-/// ([`metaplate_dsp::smooth::fractional_octave_standard`]: magnitude averaged with a rectangular window over the
-/// whole spectrum), in dB at every bin within the band, relative to their median. It differs from
-/// [`smoothed_flatness`] by averaging magnitudes, not power, with a window that steps as narrow modes enter and leave
-/// it, and by letting the roll-off outside the band pull the smoothed level near the band's edges.
+/// ([`metaplate_dsp::smooth::standard_levels_db`]: magnitude averaged with a rectangular window over the whole
+/// spectrum), in dB at every bin within the band, relative to their median. It differs from [`smoothed_flatness`] by
+/// averaging magnitudes, not power, with a window that steps as narrow modes enter and leave it, and by letting the
+/// response half a window beyond the band's edges count.
 ///
 /// Valid range: a finite `ir` of at least 6 samples; `0 <= lo < hi <= sample_rate_hz / 2` with at least one bin
 /// inside; `fraction` finite, > 0 and wide enough to hold more than one of the smoothing's points.
@@ -64,28 +59,16 @@ pub fn standard_flatness(
     band_hz: (f64, f64),
     fraction: f64,
 ) -> Result<Flatness, DspError> {
-    let n = ir.len();
-    if n < 6 {
-        return Err(DspError::Empty { input: "verification response (at least 6 samples)" });
-    }
-    let spectrum = metaplate_dsp::fft::forward(ir, n)?;
-    let magnitude: Vec<f64> = spectrum.iter().map(|c| c.norm()).collect();
-    let (smoothed, _) = metaplate_dsp::smooth::fractional_octave_standard(&magnitude, fraction)?;
-    let mut levels_db: Vec<f64> = smoothed
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| (band_hz.0..=band_hz.1).contains(&metaplate_dsp::fft::bin_freq_hz(*k, n, sample_rate_hz)))
-        .map(|(_, m)| 20.0 * m.log10())
-        .collect();
-    if levels_db.is_empty() || levels_db.iter().any(|l| !l.is_finite()) {
-        return Err(DspError::InvalidParameter {
-            name: "band_hz",
-            reason: format!("{band_hz:?} Hz holds no bin of {n} samples, or a smoothed level of zero"),
-        });
-    }
+    Ok(of_levels(&metaplate_dsp::smooth::standard_levels_db(ir, sample_rate_hz, fraction, band_hz)?))
+}
+
+/// The flatness of `(freq_hz, level_db)` levels: their median and extremes relative to it (the levels are
+/// non-empty and finite: the smoothing functions' guarantee).
+fn of_levels(levels: &[(f64, f64)]) -> Flatness {
+    let mut levels_db: Vec<f64> = levels.iter().map(|(_, l)| *l).collect();
     let median_db = metaplate_dsp::stats::median(&mut levels_db).unwrap_or(0.0);
     let (min, max) = levels_db.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
-    Ok(Flatness { median_db, min_db: min - median_db, max_db: max - median_db })
+    Flatness { median_db, min_db: min - median_db, max_db: max - median_db }
 }
 
 #[cfg(test)]

@@ -163,6 +163,34 @@ pub fn smoothed_levels_db(
     band_levels_db(&smoothed, n, sample_rate_hz, band_hz)
 }
 
+/// Levels of `ir`'s magnitude spectrum (an FFT of `ir`'s own length, no padding) smoothed by pyfar's standard
+/// fractional-octave smoothing ([`fractional_octave_standard`]), dB re 1 (units of `ir`), as `(freq_hz, level_db)`
+/// at every bin inside `band_hz`: the flatness others would report. Its window reaches half of `1/fraction` of an
+/// octave beyond the band's edges and is not cut there.
+///
+/// Valid range: a finite `ir` of at least 6 samples; `fraction` as [`fractional_octave_standard`]; a band holding at
+/// least one bin.
+///
+/// # Errors
+/// [`DspError::Empty`] / [`DspError::NonFinite`] for `ir`; [`DspError::InvalidParameter`] for a band holding no bin,
+/// a bad `fraction`, or a smoothed level of zero in the band.
+pub fn standard_levels_db(
+    ir: &[f64],
+    sample_rate_hz: f64,
+    fraction: f64,
+    band_hz: (f64, f64),
+) -> Result<Vec<(f64, f64)>, DspError> {
+    let n = ir.len();
+    if n < 6 {
+        return Err(DspError::Empty { input: "response (at least 6 samples)" });
+    }
+    let magnitude: Vec<f64> = fft::forward(ir, n)?.iter().map(|c| c.norm()).collect();
+    let (smoothed, _) = fractional_octave_standard(&magnitude, fraction)?;
+    // A spline can overshoot below zero next to a deep notch: that is no level (refused below), not its square.
+    let power: Vec<f64> = smoothed.iter().map(|m| if *m > 0.0 { m * m } else { 0.0 }).collect();
+    band_levels_db(&power, n, sample_rate_hz, band_hz)
+}
+
 /// `(freq_hz, 10 log10(power))` at the bins of an `n`-point DFT inside `band_hz`.
 pub(crate) fn band_levels_db(
     power: &[f64],

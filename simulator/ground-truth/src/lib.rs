@@ -73,10 +73,13 @@ pub struct CompensationConfig {
 
 impl CompensationConfig {
     /// The calibration recipe's settings (`metaplate calibrate`: Kirkeby inverse of the third-octave-smoothed
-    /// magnet response, flat within 0.25 dB predicted over 62 to 625 Hz, at most 16 designs) at `sample_rate_hz`,
-    /// with the filter's length and modelling delay kept in seconds (341 ms, 20 ms).
+    /// magnet response, flat within 0.25 dB predicted over 62 to 625 Hz on the project's and pyfar's standard
+    /// smoothing, Kirkeby band 50 to 710 Hz, at most 16 designs) at `sample_rate_hz`, with the filter's length and
+    /// modelling delay kept in seconds (341 ms, 20 ms). The model's band (40 to 700 Hz by default, tapered from 630
+    /// Hz) ends below where the standard window at 625 Hz reaches (701.5 Hz): there the standard smoothing sees the
+    /// model's taper, above the analyses' band.
     ///
-    /// Valid range: `sample_rate_hz` above 1650 Hz (twice the regularisation's upper corner, 825 Hz).
+    /// Valid range: `sample_rate_hz` above 1820 Hz (twice the regularisation's upper corner, 910 Hz).
     pub fn calibration(sample_rate_hz: f64) -> Self {
         let recipe = KirkebyConfig::calibration_default();
         let scale = sample_rate_hz / recipe.sample_rate_hz;

@@ -139,6 +139,7 @@ impl Plan for CalibrationPlan<'_> {
             band_hz: cfg.check_band_hz,
             tolerance_db: cfg.design_tolerance_db,
             max_designs: cfg.max_designs,
+            standard: cfg.standard_smoothing,
         };
         let volts_per_fs = instruments.rig.wiring.loopback_volts_per_full_scale;
         Ok(CalibrationProcessor { deconv, equaliser, volts_per_fs })
@@ -220,8 +221,14 @@ impl Plan for CalibrationPlan<'_> {
             )));
         }
         match processed {
-            Processed::Designed { response, filter, predicted_db, designs, .. } => {
-                tracing::debug!(actuator = current.actuator, predicted_db, designs, "inverse filter designed");
+            Processed::Designed { response, filter, predicted_db, predicted_standard_db, designs, .. } => {
+                tracing::debug!(
+                    actuator = current.actuator,
+                    predicted_db,
+                    predicted_standard_db,
+                    designs,
+                    "inverse filter designed"
+                );
                 current.designed = Some((response, filter));
                 current.phase = Phase::Verification;
                 self.current = Some(current);
@@ -231,11 +238,14 @@ impl Plan for CalibrationPlan<'_> {
                 let Some((response, filter)) = current.designed.take() else {
                     return Err(RecipeError::Internal(format!("actuator {actuator}: verified without a filter")));
                 };
-                let pass = flatness.deviation_db() <= self.cfg.max_deviation_db;
+                let limit = self.cfg.max_deviation_db;
+                let pass = flatness.deviation_db() <= limit
+                    && (!self.cfg.standard_smoothing || standard.deviation_db() <= limit);
                 tracing::info!(
                     actuator,
                     attempt = current.attempt,
                     deviation_db = flatness.deviation_db(),
+                    standard_deviation_db = standard.deviation_db(),
                     boost_db = filter.max_boost_db,
                     "verified"
                 );
@@ -270,7 +280,14 @@ mod tests {
     }
 
     fn designed(actuator: usize) -> Result<Processed, RecipeError> {
-        Ok(Processed::Designed { actuator, response: vec![0.25; 4], filter: filter(), predicted_db: 0.5, designs: 1 })
+        Ok(Processed::Designed {
+            actuator,
+            response: vec![0.25; 4],
+            filter: filter(),
+            predicted_db: 0.5,
+            predicted_standard_db: Some(0.5),
+            designs: 1,
+        })
     }
 
     fn verified(actuator: usize, deviation_db: f64) -> Result<Processed, RecipeError> {
@@ -341,6 +358,30 @@ mod tests {
             }
         }
         assert_eq!(plan.results[0].attempts, 2);
+    }
+
+    #[test]
+    fn a_verification_flat_on_one_smoothing_only_fails_when_both_are_judged() {
+        let flat = Flatness { median_db: 0.0, min_db: -0.3, max_db: 0.3 };
+        let steppy = Flatness { median_db: 0.0, min_db: -1.6, max_db: 0.4 };
+        for (standard_smoothing, expected) in [(true, Status::Failed), (false, Status::Valid)] {
+            let cfg = CalibrationConfig { max_attempts: 1, standard_smoothing, ..CalibrationConfig::default() };
+            let mut plan = plan(&SITES, &cfg);
+            plan.start(&BTreeSet::new());
+            plan.next(false);
+            plan.settle(designed(0)).unwrap();
+            plan.next(false);
+            let verdict = plan
+                .settle(Ok(Processed::Verified {
+                    actuator: 0,
+                    verification: vec![0.5; 4],
+                    flatness: flat,
+                    standard: steppy,
+                }))
+                .unwrap();
+            let Verdict::Commit { status, .. } = verdict else { panic!("a commit") };
+            assert_eq!(status, expected, "standard smoothing judged: {standard_smoothing}");
+        }
     }
 
     #[test]

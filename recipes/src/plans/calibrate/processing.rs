@@ -30,7 +30,16 @@ pub(super) struct Recorded {
 /// What processing made of a recording.
 pub(super) enum Processed {
     /// The measured response (m/s per full scale) and the filter designed from it.
-    Designed { actuator: usize, response: Vec<f64>, filter: KirkebyFilter, predicted_db: f64, designs: usize },
+    /// `predicted_db`: the equaliser's predicted deviation on the project's smoothing, `predicted_standard_db` on
+    /// pyfar's (when judged).
+    Designed {
+        actuator: usize,
+        response: Vec<f64>,
+        filter: KirkebyFilter,
+        predicted_db: f64,
+        predicted_standard_db: Option<f64>,
+        designs: usize,
+    },
     /// The verification response (m/s per full scale) and its flatness over the check band.
     /// `flatness` on the project's smoothing (the verdict), `standard` on pyfar's (reported).
     Verified { actuator: usize, verification: Vec<f64>, flatness: Flatness, standard: Flatness },
@@ -64,8 +73,14 @@ impl Processor for CalibrationProcessor {
                 // The broadband response, with the plate's narrow driving-point modes averaged out, is what is
                 // flattened.
                 let equaliser = design_equaliser(&normalised, &self.equaliser)?;
-                let (predicted_db, designs) = (equaliser.predicted_deviation_db(), equaliser.designs);
-                Ok(Processed::Designed { actuator, response, filter: equaliser.filter, predicted_db, designs })
+                Ok(Processed::Designed {
+                    actuator,
+                    response,
+                    predicted_db: equaliser.predicted_deviation_db(),
+                    predicted_standard_db: equaliser.predicted_standard_deviation_db(),
+                    designs: equaliser.designs,
+                    filter: equaliser.filter,
+                })
             }
             Phase::Verification => {
                 let flatness = smoothed_flatness(&response, fs, band_hz, self.equaliser.fraction)?;
