@@ -55,7 +55,7 @@ fn the_two_builtins_differ_only_in_resonators() {
 }
 
 #[test]
-fn the_untaped_plate_differs_only_in_the_vibrometers_light() {
+fn the_untaped_plate_differs_only_in_the_vibrometer() {
     let meta = Scene::builtin("metamaterial").unwrap();
     let untaped = Scene::builtin("metamaterial-untaped").unwrap();
     let twin = Scene {
@@ -65,12 +65,14 @@ fn the_untaped_plate_differs_only_in_the_vibrometers_light() {
         ..meta.clone()
     };
     assert_eq!(twin, untaped);
-    // Less light and more speckle and dropouts, the same noise floor at full level; the same plate, so the same
-    // Green's functions (one cache entry).
+    // Less light, more speckle, dropouts and noise (the lab's 1 / level growth of the noise stops at a level of
+    // 0.05, 16 times the taped scene's noise, too little to matter: the scene file says why); the same plate, so
+    // the same Green's functions (one cache entry).
     assert!(untaped.ldv.speckle_mean_level < meta.ldv.speckle_mean_level / 10.0);
     assert!(untaped.ldv.speckle_spread > meta.ldv.speckle_spread);
     assert!(untaped.ldv.dropout_probability > meta.ldv.dropout_probability);
-    assert_eq!(untaped.ldv.noise_rms_m_s, meta.ldv.noise_rms_m_s);
+    assert!(untaped.ldv.noise_rms_m_s > meta.ldv.noise_rms_m_s);
+    assert_eq!(untaped.ldv.max_velocity_m_s, meta.ldv.max_velocity_m_s);
     assert_eq!(untaped.physics_hash(), meta.physics_hash());
 }
 
