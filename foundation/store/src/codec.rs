@@ -230,7 +230,7 @@ fn check_schema(found: &arrow_schema::Schema, file: &str) -> Result<(), StoreErr
     for expected in arrow_schema(1).fields() {
         let reason = match found.field_with_name(expected.name()) {
             // Files written before the column existed.
-            Err(_) if expected.name() == schema::KIND => continue,
+            Err(_) if [schema::KIND, schema::ESTIMATED_ERROR_DB].contains(&expected.name().as_str()) => continue,
             Err(_) => format!("column {} is missing", expected.name()),
             Ok(f) if !schema::compatible(expected.data_type(), f.data_type()) => {
                 format!("column {} has type {}, expected {}", f.name(), f.data_type(), expected.data_type())
@@ -437,8 +437,16 @@ mod tests {
         writer.write(&without_kind).unwrap();
         writer.close().unwrap();
         let decoded = read_parquet(Bytes::from(bytes), "t.parquet").unwrap();
-        assert!(decoded.metas.iter().all(|m| m.kind.is_none()));
+        assert!(decoded.metas.iter().all(|m| m.kind.is_none() && m.estimated_error_db.is_none()));
         assert_eq!(decoded.metas[0].status, Some(Status::ReMeasured));
+        // A file with `kind` but written before `estimated_error_db` existed.
+        let without_estimate = batch.project(&[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]).unwrap();
+        let mut bytes = Vec::new();
+        let mut writer = ArrowWriter::try_new(&mut bytes, without_estimate.schema(), None).unwrap();
+        writer.write(&without_estimate).unwrap();
+        writer.close().unwrap();
+        let decoded = read_parquet(Bytes::from(bytes), "t.parquet").unwrap();
+        assert!(decoded.metas.iter().all(|m| m.estimated_error_db.is_none()));
     }
 
     /// Records of `rows` rows with `len`-sample responses, every sample distinct.

@@ -247,15 +247,32 @@ mod tests {
         let names: Vec<_> = schema.fields().iter().map(|f| f.name().as_str()).collect();
         assert_eq!(
             names,
-            [POINT_INDEX, IX, IY, X_M, Y_M, ACTUATOR, SAMPLE_RATE_HZ, IR, SNR_DB, STATUS, RETRIES, MEASURED_AT, KIND]
+            [
+                POINT_INDEX,
+                IX,
+                IY,
+                X_M,
+                Y_M,
+                ACTUATOR,
+                SAMPLE_RATE_HZ,
+                IR,
+                SNR_DB,
+                STATUS,
+                RETRIES,
+                MEASURED_AT,
+                KIND,
+                ESTIMATED_ERROR_DB
+            ]
         );
         let unit = |name: &str| schema.field_with_name(name).ok().and_then(|f| f.metadata().get("unit").cloned());
         assert_eq!(unit(X_M).as_deref(), Some("m"));
         assert_eq!(unit(SAMPLE_RATE_HZ).as_deref(), Some("Hz"));
         assert_eq!(unit(SNR_DB).as_deref(), Some("dB"));
+        assert_eq!(unit(ESTIMATED_ERROR_DB).as_deref(), Some("dB"));
         // Keys and the response itself are required; the quality columns are filled only by scans.
         for f in schema.fields() {
-            let optional = [SNR_DB, STATUS, RETRIES, MEASURED_AT, KIND].contains(&f.name().as_str());
+            let optional =
+                [SNR_DB, STATUS, RETRIES, MEASURED_AT, KIND, ESTIMATED_ERROR_DB].contains(&f.name().as_str());
             assert_eq!(f.is_nullable(), optional, "{}", f.name());
         }
     }
