@@ -34,6 +34,7 @@ COLUMNS = {
     "retries": (pl.UInt32, pa.uint32()),
     "measured_at": (pl.Datetime("us", "UTC"), pa.timestamp("us", tz="UTC")),
     "kind": (pl.String, pa.string()),
+    "estimated_error_db": (pl.Float64, pa.float64()),
 }
 
 
