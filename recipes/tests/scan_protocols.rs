@@ -4,31 +4,24 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
-use metaplate_core::scene::Scene;
+mod common;
+
 use metaplate_dsp::accuracy::ERROR_BAND_HZ;
 use metaplate_dsp::excitation::ExcitationProtocol;
-use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanSummary, scan};
-use metaplate_recipes::{Event, Observer, Output, RunControl};
+use metaplate_recipes::scan::{ScanConfig, ScanSummary, scan};
+use metaplate_recipes::{Event, Observer, RunControl};
 use metaplate_store::{Dataset, Status};
 
-/// Runs `protocol` on an `nx` x `ny` subset of the metamaterial scene; returns the sorted errors (dB), the rig-clock
-/// seconds per point, the summary and the rows' statuses.
-fn run(protocol: &str, nx: usize, ny: usize) -> (Vec<f64>, f64, ScanSummary, Vec<Status>) {
-    let scene = Scene::builtin("metamaterial").unwrap();
-    let plan = ScanPlan::new(scene.grid, &scene.grid_mask(), Some((nx, ny))).unwrap();
-    let options = LabOptions { points: Some(plan.points.clone()), ..LabOptions::default() };
-    let lab = MockLab::new(&scene, &options).unwrap();
+/// Runs `protocol` on the first `points` points of the metamaterial scene's 7 x 5 plan (the Green's functions the
+/// other scan tests share, cached); returns the sorted errors (dB), the rig-clock seconds per point, the summary
+/// and the rows' statuses.
+fn run(protocol: &str, points: usize) -> (Vec<f64>, f64, ScanSummary, Vec<Status>) {
+    let scene = common::metamaterial();
+    let (lab, plan) = common::lab_and_plan(&scene, 7, 5);
+    let plan = common::prefix(&plan, points);
     let mut rig = lab.rig().unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let out = Output {
-        dir: dir.path().to_path_buf(),
-        scene: scene.id(),
-        software_version: "test".into(),
-        resume: false,
-        force: false,
-        preflight: None,
-    };
+    let out = common::output(dir.path(), &scene, false);
     let cfg = ScanConfig { protocol: ExcitationProtocol::by_name(protocol).unwrap(), seed: 7, ..ScanConfig::default() };
     let summary = scan(&mut rig, &plan, None, &cfg, &out, &RunControl::new(), &mut Reasons).unwrap();
     let dataset = Dataset::open(dir.path()).unwrap();
@@ -64,8 +57,8 @@ impl Observer for Reasons {
 
 #[test]
 fn hadamard_matches_quick_in_less_time_per_point() {
-    let (quick, t_quick, _, _) = run("quick", 2, 2);
-    let (had, t_had, summary, _) = run("hadamard:0.6x1", 2, 2);
+    let (quick, t_quick, _, _) = run("quick", 4);
+    let (had, t_had, summary, _) = run("hadamard:0.6x1", 4);
     let median = |e: &[f64]| e[e.len() / 2];
     eprintln!(
         "quick: median {:.1} dB, worst {:.1} dB, {t_quick:.1} s/point; hadamard:0.6x1: median {:.1} dB, worst {:.1} dB, \
@@ -91,7 +84,7 @@ fn hadamard_matches_quick_in_less_time_per_point() {
 fn an_unreachable_snr_target_costs_bounded_time_then_flags_the_rows() {
     // 200 dB is beyond any recording's 16-bit DAQ; 2 rounds at most: every row failed, in about twice the time of
     // one round (8 x 1.1 s nominal each), not more.
-    let (_, t, summary, statuses) = run("adaptive:0.6x2@200/2", 1, 1);
+    let (_, t, summary, statuses) = run("adaptive:0.6x2@200/2", 1);
     assert!(statuses.iter().all(|s| *s == Status::Failed), "{statuses:?}");
     assert_eq!(summary.deferred, 0, "a bounded adaptive failure is final, not deferred: {summary:?}");
     // Nominal: 2 rounds x 8 shots x (1.2 + 0.5) s = 27.2 s; beam moves and recording margins add a few seconds.

@@ -304,7 +304,9 @@ mod tests {
     /// computation would give (every sample 0.25), to tell a loaded entry from a computed one.
     fn entry(dir: &Path) -> (Scene, ModelOptions, GreensRequest, PathBuf, GreensFunctions) {
         let scene = Scene::builtin("homogeneous").unwrap();
-        let options = ModelOptions::default();
+        // The coarsest lattice: these tests are about the cache's files and claims, not the physics, and a
+        // computation at the default lattice takes half a minute.
+        let options = ModelOptions { refinement: 1, ..ModelOptions::default() };
         let request = GreensRequest {
             points: vec![612],
             actuators: vec![0],
