@@ -172,7 +172,7 @@ fn measure(
     // than the period wraps its tail onto its start); one is deconvolved linearly over the whole recording, and
     // the interleaved scheme's one sweep too.
     let period_samples = match protocol.scheme {
-        Scheme::Sequential | Scheme::Hadamard if protocol.repetitions() >= 2 => {
+        Scheme::Sequential | Scheme::Hadamard | Scheme::Staggered if protocol.repetitions() >= 2 => {
             Some((protocol.sweep.duration_s * fs).round() as usize)
         }
         _ => None,

@@ -389,6 +389,7 @@ fn simultaneous_family(protocol: &ExcitationProtocol) -> Option<&'static str> {
     match protocol.scheme {
         Scheme::Sequential => None,
         Scheme::Hadamard => Some("hadamard"),
+        Scheme::Staggered => Some("staggered"),
         Scheme::Interleaved { .. } => Some("interleaved"),
     }
 }

@@ -11,6 +11,7 @@
 //! |---|---|---|
 //! | [`Scheme::Sequential`] (the paper's, with a linear sweep) | one per actuator, the others silent | none beyond the per-channel pipeline's: responses shorter than one period |
 //! | [`Scheme::Hadamard`] | `N` (the power of two `>= actuators`), all actuators at once with the signs of row `s` of the Sylvester Hadamard matrix | linearity and superposition (the actuators' responses add at the plate); distortion of one actuator leaks into the others' responses as noise |
+//! | [`Scheme::Staggered`] | one: all actuators play the same periodic linear sweep, actuator `k` circularly shifted by `k` slots of `period / actuators` | linearity and superposition; each response (and the band limit's precursor) within one slot, beyond which it lands in the next actuator's; odd- and even-order distortion of every actuator spreads over the whole period, so every actuator's window collects a share of all |
 //! | [`Scheme::Interleaved`] (multiple exponential sweeps) | one: all actuators play one exponential sweep, actuator `k` delayed by `k * slot_s` | linearity; the response plus the harmonics' advance `L ln 3` fit in one slot; player and recorder on one clock (no drift estimate: a drift `d` moves actuator `k`'s response by `k slot_s d`) |
 //!
 //! Energy: with the same sweep and repetitions, each actuator gets as much excitation energy in a Hadamard scan as
@@ -34,9 +35,11 @@
 //! | `sequential:DxR` | each actuator alone, linear sweeps | as `paper` |
 //! | `sequential-exp:DxR` | each actuator alone, exponential sweeps; the harmonics land before time 0 of the periodic response and are cut away (harmonic separation) | harmonic `k`'s advance `L ln k` (`L = D / ln(f2/f1)`) at least the response length beyond which the window stops, i.e. `D - 0.5 s >= L ln 2` for the second harmonic |
 //! | `hadamard:DxR` | all actuators at once, 8 shots signed by the 8 x 8 Hadamard matrix, decoded by its transpose (8 x the energy per actuator per unit time) | linearity and superposition at the plate; odd-order distortion flips with the sign and stays with its actuator (as sequentially); even-order does not flip, so it can only land in actuator 0's (all-ones) column |
+//! | `staggered:DxR` (R >= 2) | all 8 actuators in one shot, each playing the D s linear sweep circularly shifted by its slot, D / 8 s (at least 0.6 s: the 0.5 s response and its precursor in a slot), R periods: the periodic deconvolution gives all 8 responses side by side, every actuator getting R x D s of sweep; one ring-out per point | as `hadamard`, and every response shorter than a slot (its tail beyond lands in the next actuator's window); the drives start and stop mid-sweep (a click at each end, exact for a linear plate) |
 //! | `interleaved:D` | all actuators in one shot, one exponential sweep each, staggered by a slot (the multiple exponential sweep method) | linearity; slot >= response (0.5 s) + the third harmonic's advance `L ln 3`, else refused; one period: no SNR estimate, no averaging; **no clock-drift correction**: actuator `k`'s response is cut at `k` slots on the recorder's clock, off by `k x slot x drift` (12 samples for actuator 7 at 50 ppm with 1.43 s slots), which costs it most of its accuracy at the top of the band (measured median error -10 dB on the mock lab, against -37 dB for the others) |
 //! | `adaptive:DxR@SNR[/ROUNDS]` (R >= 2) | Hadamard rounds (`hadamard:DxR`) averaged until every actuator's SNR reaches `SNR` dB, at most `ROUNDS` (default 8) | as `hadamard`; the SNR estimate is the spread of the periods; when the target is not met in `ROUNDS` rounds the rows are committed with status `failed` and the reason |
 //! | `sequential-adaptive:DxR@DB[/ROUNDS]` (R >= 2) | each actuator alone (as `sequential:DxR`), shot after shot, averaged until that actuator's own estimated error is `DB` dB or less, at most `ROUNDS` shots: each row gets the time its response needs | as `sequential`; the estimate sees the noise only |
+//! | `staggered-adaptive:DxR@DB[/ROUNDS]` (R >= 2) | staggered shots (`staggered:DxR`) averaged until every actuator's estimated error at the point is `DB` dB or less, at most `ROUNDS`: each point gets the time its darkest speckle and weakest actuator need | as `staggered`; the estimate sees the noise only |
 //! | `adaptive-error:DxR@DB[/ROUNDS]` (R >= 2) | Hadamard rounds averaged until every actuator's estimated error over 80..600 Hz ([`crate::pipeline::ChannelResult::estimated_error_db`]) is `DB` dB or less, at most `ROUNDS` | as `adaptive`; the estimate sees the noise, not biases every period shares (distortion, drift) |
 //!
 //! Every protocol keeps the paper's deconvolution ([`DeconvConfig::paper`]: 0.5 s responses, band 62..625 Hz);
@@ -62,6 +65,10 @@ pub enum Scheme {
     Sequential,
     /// All actuators at once, `N` shots signed by a Sylvester Hadamard matrix, decoded by its transpose.
     Hadamard,
+    /// All actuators in one shot, each playing the periodic sweep circularly shifted by its slot (`period /
+    /// actuators`, rounded down to whole samples at the rate played and decoded), `repetitions` periods: the
+    /// periodic deconvolution of the loopback holds every actuator's response in its own slot.
+    Staggered,
     /// All actuators in one shot, playing one exponential sweep staggered by `slot_s` (the multiple exponential
     /// sweep method); one period, so no SNR estimate.
     Interleaved {
@@ -189,7 +196,7 @@ impl ExcitationProtocol {
     /// Periods per shot (1 for the interleaved scheme).
     pub fn repetitions(&self) -> usize {
         match self.scheme {
-            Scheme::Sequential | Scheme::Hadamard => self.repetitions,
+            Scheme::Sequential | Scheme::Hadamard | Scheme::Staggered => self.repetitions,
             Scheme::Interleaved { .. } => 1,
         }
     }
@@ -226,6 +233,23 @@ impl ExcitationProtocol {
             return invalid("repetitions", "must be at least 1".into());
         }
         let sweep = &self.sweep;
+        if matches!(self.scheme, Scheme::Staggered) {
+            // The SNR estimate and the drift correction need two periods; each response must fit its slot.
+            if self.repetitions() < 2 {
+                return invalid("repetitions", "a staggered protocol needs at least 2 periods".into());
+            }
+            let slot_s = sweep.duration_s / actuators as f64;
+            if ir_len_s.is_nan() || slot_s < ir_len_s.max(MIN_SWEEP_S) {
+                return invalid(
+                    "ir_len_s",
+                    format!(
+                        "a {ir_len_s} s response does not fit the {slot_s:.3} s slot of {actuators} actuators in a {} \
+                         s period: at least {MIN_SWEEP_S} s per actuator",
+                        sweep.duration_s
+                    ),
+                );
+            }
+        }
         match self.scheme {
             Scheme::Sequential | Scheme::Hadamard if ir_len_s.is_nan() || ir_len_s >= sweep.duration_s => {
                 // The periodic deconvolution wraps a response longer than the period onto its own start.
@@ -234,7 +258,7 @@ impl ExcitationProtocol {
                     format!("a {ir_len_s} s response does not fit the sweep's {} s period", sweep.duration_s),
                 );
             }
-            Scheme::Sequential | Scheme::Hadamard => {}
+            Scheme::Sequential | Scheme::Hadamard | Scheme::Staggered => {}
             Scheme::Interleaved { slot_s } => {
                 let Some(rate_s) = sweep.exp_rate_s() else {
                     return invalid("sweep.kind", "the interleaved protocol needs an exponential sweep".into());
@@ -286,6 +310,8 @@ impl ExcitationProtocol {
                     delays_s: (0..actuators).map(|k| k as f64 * slot_s).collect(),
                 }]
             }
+            // The shifts are circular, within each period: none delays the shot's start.
+            Scheme::Staggered => vec![Shot { gains: vec![1.0; actuators], delays_s: undelayed }],
         })
     }
 
@@ -315,6 +341,7 @@ impl ExcitationProtocol {
         let (shots, delay_s) = match self.scheme {
             Scheme::Sequential => (actuators, 0.0),
             Scheme::Hadamard => (actuators.next_power_of_two(), 0.0),
+            Scheme::Staggered => (1, 0.0),
             Scheme::Interleaved { slot_s } => (1, actuators.saturating_sub(1) as f64 * slot_s),
         };
         shots as f64 * (self.repetitions() as f64 * self.sweep.duration_s + delay_s + ir_len_s)
@@ -337,7 +364,11 @@ impl ExcitationProtocol {
         }
         let delay = (delay_s * sample_rate_hz).round() as usize;
         let mut out = vec![0.0; delay];
-        let period = self.excitation(sample_rate_hz)?;
+        let mut period = self.excitation(sample_rate_hz)?;
+        if matches!(self.scheme, Scheme::Staggered) {
+            let shift = staggered_shift(actuator, shot.gains.len(), period.len());
+            period.rotate_right(shift);
+        }
         for _ in 0..self.repetitions() {
             out.extend(period.iter().map(|x| gain * x));
         }
@@ -361,7 +392,7 @@ impl ExcitationProtocol {
     pub fn decoder(&self, actuators: usize, cfg: &DeconvConfig) -> Result<Decoder, DspError> {
         self.validate(actuators, cfg.ir_len as f64 / cfg.sample_rate_hz)?;
         let prepared = match self.scheme {
-            Scheme::Sequential | Scheme::Hadamard => {
+            Scheme::Sequential | Scheme::Hadamard | Scheme::Staggered => {
                 let layout = RepetitionLayout {
                     excitation: self.excitation(cfg.sample_rate_hz)?,
                     repetitions: self.repetitions(),
@@ -412,10 +443,10 @@ impl Decoder {
     /// [`DspError::InvalidParameter`] for an interleaved protocol (its one shot decodes as a whole: see
     /// [`Decoder::decode`]); otherwise as [`PreparedLayout::process_channel`].
     pub fn decode_shot(&self, velocity: &[f64], loopback: &[f64]) -> Result<ChannelResult, DspError> {
-        let Some(prepared) = &self.prepared else {
+        let (Some(prepared), Scheme::Sequential | Scheme::Hadamard) = (&self.prepared, self.protocol.scheme) else {
             return Err(DspError::InvalidParameter {
                 name: "scheme",
-                reason: "an interleaved shot holds every actuator: decode it with `decode`".into(),
+                reason: "this protocol's one shot holds every actuator: decode it with `decode`".into(),
             });
         };
         prepared.process_channel(velocity, loopback)
@@ -440,7 +471,7 @@ impl Decoder {
         let shots = match self.protocol.scheme {
             Scheme::Sequential => actuators,
             Scheme::Hadamard => actuators.next_power_of_two(),
-            Scheme::Interleaved { .. } => 1,
+            Scheme::Staggered | Scheme::Interleaved { .. } => 1,
         };
         if recordings.len() != shots {
             return Err(DspError::LengthMismatch { what: "recordings and shots", a: recordings.len(), b: shots });
@@ -455,6 +486,15 @@ impl Decoder {
                     .map(|(velocity, loopback)| self.decode_shot(velocity, loopback))
                     .collect::<Result<Vec<_>, _>>()?;
                 hadamard_decode(&per_shot, actuators)
+            }
+            Scheme::Staggered => {
+                let (velocity, loopback) = recordings[0];
+                let Some(prepared) = &self.prepared else {
+                    return Err(DspError::InvalidParameter { name: "scheme", reason: "no layout prepared".into() });
+                };
+                let n = prepared.layout().excitation.len();
+                let shifts: Vec<usize> = (0..actuators).map(|k| staggered_shift(k, actuators, n)).collect();
+                prepared.process_shifted(velocity, loopback, &shifts)
             }
             Scheme::Interleaved { slot_s } => {
                 let fs = cfg.sample_rate_hz;
@@ -531,11 +571,19 @@ pub const NAMES: &[(&str, &str)] = &[
     ("sequential:DxR", "sequential linear sweeps, D s x R"),
     ("sequential-exp:DxR", "sequential exponential sweeps with harmonic separation"),
     ("hadamard:DxR", "all 8 actuators at once, Hadamard-coded linear sweeps (8 shots)"),
+    (
+        "staggered:DxR",
+        "all 8 actuators in one shot, the D s linear sweep circularly shifted by D/8 s per actuator, R periods",
+    ),
     ("interleaved:D", "interleaved exponential sweeps (multiple exponential sweep method), one shot"),
     ("adaptive:DxR@SNR[/ROUNDS]", "Hadamard rounds averaged until SNR dB per actuator, at most ROUNDS"),
     (
         "adaptive-error:DxR@DB[/ROUNDS]",
         "Hadamard rounds averaged until every actuator's estimated error is DB dB or less, at most ROUNDS",
+    ),
+    (
+        "staggered-adaptive:DxR@DB[/ROUNDS]",
+        "staggered shots (staggered:DxR) averaged until every actuator's estimated error is DB dB or less",
     ),
     (
         "sequential-adaptive:DxR@DB[/ROUNDS]",
@@ -580,6 +628,13 @@ pub fn parse(name: &str) -> Result<ExcitationProtocol, ProtocolNameError> {
             let (d, r) = duration_by_reps(need(s, name)?).map_err(|e| bad(&e))?;
             base(linear(d), r, Scheme::Hadamard)
         }
+        ("staggered", s) => {
+            let (d, r) = duration_by_reps(need(s, name)?).map_err(|e| bad(&e))?;
+            if r < 2 {
+                return Err(bad("a staggered protocol needs at least 2 periods (its drift and SNR estimates)"));
+            }
+            base(linear(d), r, Scheme::Staggered)
+        }
         ("interleaved", s) => {
             let d = number(need(s, name)?, "duration").map_err(|e| bad(&e))?;
             check_duration(d).map_err(|e| bad(&e))?;
@@ -590,7 +645,7 @@ pub fn parse(name: &str) -> Result<ExcitationProtocol, ProtocolNameError> {
             let slot_s = ((ir_s + advance_s + SLOT_MARGIN_S) * 1000.0).ceil() / 1000.0;
             base(sweep, 1, Scheme::Interleaved { slot_s })
         }
-        (kind @ ("adaptive" | "adaptive-error" | "sequential-adaptive"), s) => {
+        (kind @ ("adaptive" | "adaptive-error" | "sequential-adaptive" | "staggered-adaptive"), s) => {
             let s = need(s, name)?;
             let quantity = if kind == "adaptive" { "SNR" } else { "error" };
             let (dr, rest) =
@@ -614,7 +669,11 @@ pub fn parse(name: &str) -> Result<ExcitationProtocol, ProtocolNameError> {
                 return Err(bad(&format!("rounds {max_rounds} must be 1 to {MAX_ROUNDS}")));
             }
             let adaptive = Some(Adaptive { target, max_rounds });
-            let scheme = if kind == "sequential-adaptive" { Scheme::Sequential } else { Scheme::Hadamard };
+            let scheme = match kind {
+                "sequential-adaptive" => Scheme::Sequential,
+                "staggered-adaptive" => Scheme::Staggered,
+                _ => Scheme::Hadamard,
+            };
             ExcitationProtocol { adaptive, ..base(linear(d), r, scheme) }
         }
         (other, _) => {
@@ -652,6 +711,12 @@ fn check_duration(d: f64) -> Result<(), String> {
             "sweep duration {d} s must be {MIN_SWEEP_S} to {MAX_SWEEP_S} s (a period holds the 0.5 s response)"
         ))
     }
+}
+
+/// Circular shift, samples, of actuator `k` of `actuators` in a staggered protocol's period of `period_samples`:
+/// `k` slots of `period_samples / actuators` (rounded down), the same for the drive and the decoder.
+pub fn staggered_shift(k: usize, actuators: usize, period_samples: usize) -> usize {
+    k * (period_samples / actuators.max(1))
 }
 
 /// Entry `(row, col)` of the Sylvester Hadamard matrix of any power-of-two order: `(-1)^popcount(row & col)`.
@@ -733,6 +798,10 @@ mod tests {
         assert_eq!((q.scheme, q.repetitions), (Scheme::Sequential, 2));
         assert_eq!(q.adaptive, Some(Adaptive { target: AdaptiveTarget::ErrorDb(-30.0), max_rounds: DEFAULT_ROUNDS }));
         assert_eq!(parse("adaptive:0.6x2@40").unwrap().adaptive.map(|a| a.max_rounds), Some(DEFAULT_ROUNDS));
+        let s = parse("staggered-adaptive:5x2@-30/4").unwrap();
+        assert_eq!((s.scheme, s.repetitions), (Scheme::Staggered, 2));
+        assert_eq!(s.adaptive, Some(Adaptive { target: AdaptiveTarget::ErrorDb(-30.0), max_rounds: 4 }));
+        assert!(parse("staggered-adaptive:5x1@-30").is_err());
     }
 
     #[test]

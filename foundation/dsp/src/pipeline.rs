@@ -169,7 +169,50 @@ impl PreparedLayout {
     /// # Errors
     /// As [`process_channel`].
     pub fn process_channel(&self, velocity: &[f64], loopback: &[f64]) -> Result<ChannelResult, DspError> {
-        let (layout, cfg) = (&self.layout, &self.cfg);
+        let positions = self.locate(velocity, loopback)?;
+        if self.layout.repetitions == 1 {
+            return single_repetition(velocity, loopback, positions[0], self.layout.excitation.len(), &self.cfg);
+        }
+        let mut results = self.periodic(velocity, &positions, loopback, &[0])?;
+        results.pop().ok_or(DspError::Empty { input: "responses" })
+    }
+
+    /// One acquisition of several sources each playing the layout's periods circularly shifted by its own number
+    /// of samples (`shifts`, each below the period), as [`PreparedLayout::process_channel`] processes one: source
+    /// `i`'s response is the period's response from `shifts[i]` on (its precursor from just before), `cfg.ir_len`
+    /// samples on the recorder's clock. Every response shares the acquisition's drift, latency and noise (the
+    /// period's noise spread evenly, of which each keeps `cfg.ir_len` samples); the SNR is the acquisition's, less
+    /// the source's share of the response energy.
+    ///
+    /// Valid range: as [`PreparedLayout::process_channel`] with two repetitions or more; each response within
+    /// its slot up to the next shift (beyond it, it lands in the next source's response).
+    ///
+    /// # Errors
+    /// As [`PreparedLayout::process_channel`]; [`DspError::InvalidParameter`] for fewer than two repetitions, no
+    /// shift, or a shift not below the period.
+    pub fn process_shifted(
+        &self,
+        velocity: &[f64],
+        loopback: &[f64],
+        shifts: &[usize],
+    ) -> Result<Vec<ChannelResult>, DspError> {
+        let n = self.layout.excitation.len();
+        if self.layout.repetitions < 2 || shifts.is_empty() || shifts.iter().any(|&s| s >= n) {
+            return Err(DspError::InvalidParameter {
+                name: "shifts",
+                reason: format!(
+                    "{} shifts (each below the period of {n} samples) over {} repetitions (at least 2)",
+                    shifts.len(),
+                    self.layout.repetitions
+                ),
+            });
+        }
+        let positions = self.locate(velocity, loopback)?;
+        self.periodic(velocity, &positions, loopback, shifts)
+    }
+
+    /// Step 1 for one acquisition: the inputs checked, and the repetitions located in the loopback.
+    fn locate(&self, velocity: &[f64], loopback: &[f64]) -> Result<Vec<f64>, DspError> {
         check_signal("velocity", velocity)?;
         check_signal("loopback", loopback)?;
         if velocity.len() != loopback.len() {
@@ -179,13 +222,21 @@ impl PreparedLayout {
                 b: loopback.len(),
             });
         }
+        self.template.locate_in_checked(loopback, self.layout.repetitions)
+    }
+
+    /// Steps 1 to 4 from the repetitions' positions (two or more), one response per circular shift.
+    fn periodic(
+        &self,
+        velocity: &[f64],
+        positions: &[f64],
+        loopback: &[f64],
+        shifts: &[usize],
+    ) -> Result<Vec<ChannelResult>, DspError> {
+        let (layout, cfg) = (&self.layout, &self.cfg);
         let n = layout.excitation.len();
         let gains = self.template.bin_gains();
-        let positions = self.template.locate_in_checked(loopback, layout.repetitions)?;
-        if layout.repetitions == 1 {
-            return single_repetition(velocity, loopback, positions[0], n, cfg);
-        }
-        let clock = fit_clock(&positions, n)?;
+        let clock = fit_clock(positions, n)?;
         let ratio = clock.ratio();
         let guard = (clock.drift_ppm.abs() * 1e-6 * n as f64).ceil() as usize + GUARD_SAMPLES;
         let tail_len = guard + cfg.ir_len;
@@ -215,7 +266,7 @@ impl PreparedLayout {
         fft::forward_destructive(&mut reference_period, &mut reference)?;
 
         let response = divide_spectra(&velocity_mean.mean, &reference, gains, cfg.regularisation)?;
-        let ir = to_recorder_clock(&fft::inverse(&response, n)?, ratio, cfg.ir_len, cfg.pre_samples, interpolator)?;
+        let period_ir = fft::inverse(&response, n)?;
         let noise_energy = band_noise_energy(&spectra, &periods.weights(), &reference, gains, cfg, n)?;
 
         // Refine the latency on the resampled loopback, which no longer has a stretch: its offset from the
@@ -223,14 +274,38 @@ impl PreparedLayout {
         let offset = self.template.delay_of(&reference)?;
         let latency_samples = grid_start + offset.delay_samples * ratio;
         check_latency(latency_samples)?;
-        Ok(ChannelResult {
-            ir,
-            snr_db: velocity_mean.snr_db(),
-            drift_ppm: clock.drift_ppm,
-            latency_samples,
-            noise_energy,
-        })
+        let irs = shifts
+            .iter()
+            .map(|&shift| {
+                let mut own = period_ir.clone();
+                own.rotate_left(shift);
+                to_recorder_clock(&own, ratio, cfg.ir_len, cfg.pre_samples, interpolator)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        // Each source's share of the velocity's signal: its response's energy over all of theirs.
+        let energies: Vec<f64> = irs.iter().map(|ir| ir.iter().map(|v| v * v).sum()).collect();
+        let total: f64 = energies.iter().sum();
+        Ok(irs
+            .into_iter()
+            .zip(energies)
+            .map(|(ir, energy)| {
+                let share_db = if shifts.len() == 1 { Some(0.0) } else { share_db(energy, total) };
+                ChannelResult {
+                    ir,
+                    snr_db: velocity_mean.snr_db().zip(share_db).map(|(snr, share)| snr + share),
+                    drift_ppm: clock.drift_ppm,
+                    latency_samples,
+                    noise_energy,
+                }
+            })
+            .collect())
     }
+}
+
+/// `10 log10(part / total)`, dB; `None` where not finite (no energy).
+fn share_db(part: f64, total: f64) -> Option<f64> {
+    let db = 10.0 * (part / total).log10();
+    db.is_finite().then_some(db)
 }
 
 /// The noise energy a response of `cfg.ir_len` samples keeps within [`ERROR_BAND_HZ`] (see

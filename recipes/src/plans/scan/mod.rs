@@ -132,6 +132,7 @@ impl ScanConfig {
                 "excitation": match p.scheme {
                     Scheme::Sequential => json!({ "kind": "sequential" }),
                     Scheme::Hadamard => json!({ "kind": "hadamard" }),
+                    Scheme::Staggered => json!({ "kind": "staggered" }),
                     Scheme::Interleaved { slot_s } => json!({ "kind": "interleaved", "slot_s": slot_s }),
                 },
                 // An SNR target keeps the key it always had, so existing datasets' configurations are unchanged.
