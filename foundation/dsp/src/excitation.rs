@@ -38,7 +38,7 @@
 //! | `staggered:DxR` (R >= 2) | all 8 actuators in one shot, each playing the D s linear sweep circularly shifted by its slot, D / 8 s (at least 0.6 s: the 0.5 s response and its precursor in a slot), R periods: the periodic deconvolution gives all 8 responses side by side, every actuator getting R x D s of sweep; one ring-out per point | as `hadamard`, and every response shorter than a slot (its tail beyond lands in the next actuator's window); the drives start and stop mid-sweep (a click at each end, exact for a linear plate) |
 //! | `interleaved:D` | all actuators in one shot, one exponential sweep each, staggered by a slot (the multiple exponential sweep method) | linearity; slot >= response (0.5 s) + the third harmonic's advance `L ln 3`, else refused; one period: no SNR estimate, no averaging; **no clock-drift correction**: actuator `k`'s response is cut at `k` slots on the recorder's clock, off by `k x slot x drift` (12 samples for actuator 7 at 50 ppm with 1.43 s slots), which costs it most of its accuracy at the top of the band (measured median error -10 dB on the mock lab, against -37 dB for the others) |
 //! | `adaptive:DxR@SNR[/ROUNDS]` (R >= 2) | Hadamard rounds (`hadamard:DxR`) averaged until every actuator's SNR reaches `SNR` dB, at most `ROUNDS` (default 8) | as `hadamard`; the SNR estimate is the spread of the periods; when the target is not met in `ROUNDS` rounds the rows are committed with status `failed` and the reason |
-//! | `sequential-adaptive:DxR@DB[/ROUNDS]` (R >= 2) | each actuator alone (as `sequential:DxR`), shot after shot, averaged until that actuator's own estimated error is `DB` dB or less, at most `ROUNDS` shots: each row gets the time its response needs | as `sequential`; the estimate sees the noise only |
+//! | `sequential-adaptive:DxR@DB[/ROUNDS]` (R >= 2) | each actuator alone (as `sequential:DxR`): a first shot of R periods, then shots as long as its estimated error says are still missing (10 % over, at least 2 periods), averaged (weighted by their periods) until that actuator's own estimated error is `DB` dB or less, at most `ROUNDS x R` periods in all: each row gets the time its response needs, in few shots (each pays the ring-out) | as `sequential`; the estimate sees the noise only, and its noise falls as 1 / periods |
 //! | `staggered-adaptive:DxR@DB[/ROUNDS]` (R >= 2) | staggered shots (`staggered:DxR`) averaged until every actuator's estimated error at the point is `DB` dB or less, at most `ROUNDS`: each point gets the time its darkest speckle and weakest actuator need | as `staggered`; the estimate sees the noise only |
 //! | `adaptive-error:DxR@DB[/ROUNDS]` (R >= 2) | Hadamard rounds averaged until every actuator's estimated error over 80..600 Hz ([`crate::pipeline::ChannelResult::estimated_error_db`]) is `DB` dB or less, at most `ROUNDS` | as `adaptive`; the estimate sees the noise, not biases every period shares (distortion, drift) |
 //!
@@ -109,6 +109,15 @@ impl AdaptiveTarget {
         match self {
             Self::SnrDb(target) => snr_db.is_some_and(|s| s >= target),
             Self::ErrorDb(target) => error_db.is_some_and(|e| e <= target),
+        }
+    }
+
+    /// By how much, dB, the noise of an actuator with this SNR and estimated error (dB, `None` when unknown) must
+    /// still fall to reach the target: positive when short of it, 0 or less when reached; `None` when unknown.
+    pub fn shortfall_db(self, snr_db: Option<f64>, error_db: Option<f64>) -> Option<f64> {
+        match self {
+            Self::SnrDb(target) => snr_db.map(|s| target - s),
+            Self::ErrorDb(target) => error_db.map(|e| e - target),
         }
     }
 
@@ -587,7 +596,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ),
     (
         "sequential-adaptive:DxR@DB[/ROUNDS]",
-        "each actuator alone, shots of D s x R averaged until its own estimated error is DB dB or less",
+        "each actuator alone until its own estimated error is DB dB or less: R periods, then the periods predicted",
     ),
 ];
 
@@ -794,6 +803,9 @@ mod tests {
         assert!(!AdaptiveTarget::ErrorDb(-35.0).reached(Some(90.0), Some(-34.9)));
         assert!(!AdaptiveTarget::ErrorDb(-35.0).reached(Some(90.0), None), "unknown is not reached");
         assert!(AdaptiveTarget::SnrDb(30.0).reached(Some(30.0), None));
+        assert_eq!(AdaptiveTarget::ErrorDb(-30.0).shortfall_db(None, Some(-27.0)), Some(3.0));
+        assert_eq!(AdaptiveTarget::SnrDb(30.0).shortfall_db(Some(36.0), None), Some(-6.0));
+        assert_eq!(AdaptiveTarget::ErrorDb(-30.0).shortfall_db(Some(10.0), None), None);
         let q = parse("sequential-adaptive:1x2@-30").unwrap();
         assert_eq!((q.scheme, q.repetitions), (Scheme::Sequential, 2));
         assert_eq!(q.adaptive, Some(Adaptive { target: AdaptiveTarget::ErrorDb(-30.0), max_rounds: DEFAULT_ROUNDS }));

@@ -41,7 +41,7 @@ use crate::error::RecipeError;
 use crate::events::{Observer, RunControl};
 use crate::output::Output;
 use crate::plans::calibrate::Calibration;
-use acquisition::build_playbacks;
+use acquisition::{ExtraShots, build_playbacks};
 use points::{PointBook, Settled, point_records, severity};
 use processing::{Gates, Job, Processed, ScanProcessor};
 use simultaneous::Simultaneous;
@@ -235,6 +235,8 @@ struct GridScan<'a> {
     playbacks: Vec<AudioPlayback>,
     /// Samples per DAQ channel to record per acquisition.
     record: usize,
+    /// A sequential adaptive protocol's shots beyond a row's first (their lengths vary).
+    extra: Option<ExtraShots>,
     ir_len: usize,
     fs: f64,
     /// Rows committed by this run, by status.
@@ -252,6 +254,7 @@ impl<'a> GridScan<'a> {
             book: PointBook::new(actuators, cfg.deferred_visits),
             playbacks: Vec::new(),
             record: 0,
+            extra: None,
             ir_len: cfg.protocol.deconv.ir_len,
             fs: 0.0,
             statuses: BTreeMap::new(),
@@ -310,6 +313,9 @@ impl Plan for GridScan<'_> {
             let (first, playbacks) = build_playbacks(instruments, &sweep, protocol, &deconv, self.calibration)?;
             self.record = record_samples(&first, fs);
             self.playbacks = playbacks;
+            if protocol.adaptive.is_some() {
+                self.extra = Some(ExtraShots::new(sweep, deconv, self.calibration));
+            }
             None
         };
         self.fs = fs;

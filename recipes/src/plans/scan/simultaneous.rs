@@ -82,13 +82,18 @@ impl Simultaneous {
     }
 }
 
-/// Coherent average of adaptive rounds, with the noise of the average from each round's SNR, and its noise within
-/// the error band from each round's (the row's error estimate).
+/// Coherent average of adaptive rounds, each weighted (equal rounds: 1 each; a sequential row's shots: their
+/// periods), with the noise of the average from each round's SNR, and its noise within the error band from each
+/// round's (the row's error estimate): independent rounds of noise `N_i` weighted `w_i` leave `sum w_i^2 N_i / (sum
+/// w_i)^2` in the average.
 pub(crate) struct Averager {
     pub count: usize,
-    /// Per actuator: sum of the responses, and sum of the rounds' noise energies (`None` once a round had none).
+    /// Sum of the rounds' weights.
+    weight: f64,
+    /// Per actuator: weighted sum of the responses, and of the rounds' noise energies times their weights squared
+    /// (`None` once a round had none).
     sums: Vec<(Vec<f64>, Option<f64>)>,
-    /// Per actuator: sum of the rounds' noise energies within the error band (`None` once a round had none).
+    /// Per actuator: the same for the noise energies within the error band.
     band_noise: Vec<Option<f64>>,
     drift_ppm: f64,
 }
@@ -97,35 +102,47 @@ impl Averager {
     pub(crate) fn new(actuators: usize) -> Self {
         Self {
             count: 0,
+            weight: 0.0,
             sums: vec![(Vec::new(), Some(0.0)); actuators],
             band_noise: vec![Some(0.0); actuators],
             drift_ppm: 0.0,
         }
     }
 
+    /// Adds a round of weight 1.
     pub(crate) fn add(&mut self, results: &[ChannelResult]) {
+        self.add_weighted(results, 1.0);
+    }
+
+    /// Adds a round of weight `weight` (> 0: its share of the average is `weight` over the sum of the weights).
+    pub(crate) fn add_weighted(&mut self, results: &[ChannelResult], weight: f64) {
         self.count += 1;
+        self.weight += weight;
+        let w2 = weight * weight;
         for (((sum, noise), band_noise), r) in self.sums.iter_mut().zip(&mut self.band_noise).zip(results) {
             sum.resize(r.ir.len(), 0.0);
-            sum.iter_mut().zip(&r.ir).for_each(|(s, v)| *s += v);
+            sum.iter_mut().zip(&r.ir).for_each(|(s, v)| *s += weight * v);
             // A round's noise energy from its SNR: energy / 10^(snr/10).
-            *noise = noise.zip(r.snr_db).map(|(n, snr)| n + energy(&r.ir) / 10f64.powf(snr / 10.0));
-            *band_noise = band_noise.zip(r.noise_energy).map(|(n, e)| n + e);
+            *noise = noise.zip(r.snr_db).map(|(n, snr)| n + w2 * energy(&r.ir) / 10f64.powf(snr / 10.0));
+            *band_noise = band_noise.zip(r.noise_energy).map(|(n, e)| n + w2 * e);
         }
         self.drift_ppm = self.drift_ppm.max(results.iter().fold(0.0f64, |m, r| m.max(r.drift_ppm.abs())));
     }
 
-    /// The averaged responses, with the average's SNR: its energy over the mean noise energy divided by the count
-    /// (independent noise averages down by the number of rounds).
+    /// The weights' sum (1 before any round, so that nothing divides by 0).
+    fn total(&self) -> f64 {
+        if self.weight > 0.0 { self.weight } else { 1.0 }
+    }
+
+    /// The averaged responses, with the average's SNR and noise within the error band.
     pub(crate) fn averaged(&self) -> Vec<Option<ChannelResult>> {
-        let n = self.count.max(1) as f64;
+        let w = self.total();
         (0..self.sums.len())
             .map(|a| {
                 let (sum, _) = &self.sums[a];
-                let ir: Vec<f64> = sum.iter().map(|v| v / n).collect();
+                let ir: Vec<f64> = sum.iter().map(|v| v / w).collect();
                 let snr_db = self.snr_db(&[a]).into_iter().next().flatten();
-                // Independent rounds: the mean's noise is their total over the count squared.
-                let noise_energy = self.band_noise[a].map(|e| e / (n * n));
+                let noise_energy = self.band_noise[a].map(|e| e / (w * w));
                 Some(ChannelResult { ir, snr_db, drift_ppm: self.drift_ppm, latency_samples: 0.0, noise_energy })
             })
             .collect()
@@ -135,13 +152,13 @@ impl Averager {
     /// ([`metaplate_dsp::accuracy::estimated_error_db`] of the averaged response and its noise); `None` where
     /// unknown.
     pub(crate) fn error_db(&self, actuators: &[usize], sample_rate_hz: f64) -> Vec<Option<f64>> {
-        let n = self.count.max(1) as f64;
+        let w = self.total();
         actuators
             .iter()
             .map(|&a| {
                 let (sum, _) = self.sums.get(a)?;
-                let noise = (*self.band_noise.get(a)?)? / (n * n);
-                let mean: Vec<f64> = sum.iter().map(|v| v / n).collect();
+                let noise = (*self.band_noise.get(a)?)? / (w * w);
+                let mean: Vec<f64> = sum.iter().map(|v| v / w).collect();
                 estimated_error_db(&mean, noise, sample_rate_hz).ok()
             })
             .collect()
@@ -149,13 +166,13 @@ impl Averager {
 
     /// SNR of the average for each of `actuators`, dB; `None` where unknown.
     pub(crate) fn snr_db(&self, actuators: &[usize]) -> Vec<Option<f64>> {
-        let n = self.count.max(1) as f64;
+        let w = self.total();
         actuators
             .iter()
             .map(|&a| {
                 let (sum, noise) = self.sums.get(a)?;
-                let signal = energy(sum) / (n * n);
-                let noise = (*noise)? / n / n;
+                let signal = energy(sum) / (w * w);
+                let noise = (*noise)? / (w * w);
                 (noise > 0.0 && signal > 0.0).then(|| 10.0 * (signal / noise).log10())
             })
             .collect()
