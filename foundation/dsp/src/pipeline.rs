@@ -628,6 +628,44 @@ mod tests {
     }
 
     #[test]
+    fn shifted_sources_each_get_their_own_response_and_bad_shifts_are_refused() {
+        // Two sources in one acquisition: the second plays the excitation circularly shifted by half the period
+        // (2400 of 4800 samples), so its response lies 2400 samples later in the period. Cut at its shift, each
+        // comes back as process_channel returns a source alone; at shift 0 the result is process_channel's, bit
+        // for bit.
+        let l = layout(3);
+        let n = l.excitation.len();
+        let (a, b) = (vec![0.0, 0.5, 0.0, -0.25], vec![0.0, 0.0, 0.3]);
+        let (va, loopback) = acquisition(&l, 500, 700, &a);
+        let mut shifted = l.excitation.clone();
+        shifted.rotate_right(n / 2);
+        let mut drive = vec![0.0; 500];
+        drive.extend(shifted.iter().cycle().take(n * l.repetitions));
+        drive.extend(std::iter::repeat_n(0.0, 700));
+        let mut vb = convolve(&drive, &b).unwrap();
+        vb.truncate(drive.len());
+        let velocity: Vec<f64> = va.iter().zip(&vb).map(|(x, y)| x + y).collect();
+        let prepared = PreparedLayout::new(&l, &cfg()).unwrap();
+        let both = prepared.process_shifted(&velocity, &loopback, &[0, n / 2]).unwrap();
+        assert_eq!(both.len(), 2);
+        for (got, truth) in both.iter().zip([&a, &b]) {
+            let err = in_band_error(&got.ir, truth, 4800);
+            assert!(err < BIAS_BOUND, "in-band error {err:e}");
+            assert!(got.snr_db.is_none_or(|s| s > 100.0), "noise-free: {:?}", got.snr_db);
+        }
+        let alone = prepared.process_channel(&va, &loopback).unwrap();
+        assert_eq!(prepared.process_shifted(&va, &loopback, &[0]).unwrap(), vec![alone]);
+        // No shift, a shift of a whole period or more, one repetition: refused, naming the shifts.
+        for shifts in [vec![], vec![0, n]] {
+            let err = prepared.process_shifted(&velocity, &loopback, &shifts).unwrap_err();
+            assert!(matches!(err, DspError::InvalidParameter { name: "shifts", .. }), "{err}");
+        }
+        let one = PreparedLayout::new(&layout(1), &cfg()).unwrap();
+        let (v1, l1) = acquisition(&layout(1), 100, 700, &a);
+        assert!(matches!(one.process_shifted(&v1, &l1, &[0]), Err(DspError::InvalidParameter { name: "shifts", .. })));
+    }
+
+    #[test]
     fn a_prepared_layout_gives_what_process_channel_gives() {
         // One preparation for several channels (latencies, responses, repetition counts): bit-identical results.
         for repetitions in [1, 3] {
