@@ -18,13 +18,13 @@ cargo nextest run --workspace --locked --no-run
 polars_log=target/polars-build.log
 mkdir -p target
 CARGO_TARGET_DIR=target/polars cargo test -p metaplate-store --locked --profile ci-polars --features polars \
-    --test python_readers --no-run >"$polars_log" 2>&1 &
+    --test tests --no-run >"$polars_log" 2>&1 &
 polars_build=$!
 trap 'kill "$polars_build" 2>/dev/null || true' EXIT
 
 cargo nextest run --workspace --locked
 cargo test --workspace --locked --doc
-cargo nextest run --workspace --locked --run-ignored only -E 'binary(python_readers) | binary(pyuff_reads) | test(polars_reads_the_trials_parquet)'
+cargo nextest run --workspace --locked --run-ignored only -E 'test(/^python_readers::/) | test(/^pyuff_reads::/) | test(polars_reads_the_trials_parquet)'
 
 if ! wait "$polars_build"; then
     cat "$polars_log" >&2
@@ -33,6 +33,6 @@ if ! wait "$polars_build"; then
 fi
 trap - EXIT
 CARGO_TARGET_DIR=target/polars cargo test -p metaplate-store --locked --profile ci-polars --features polars \
-    --test python_readers
+    --test tests -- python_readers::
 
 echo "test: every test passed in $(( $(date +%s) - start )) s"

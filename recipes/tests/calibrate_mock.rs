@@ -4,7 +4,7 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use common::{
     BAND_HZ, assert_same_rows, error_db_compensated, image, lab_and_plan, median_and_worst, metamaterial, output,

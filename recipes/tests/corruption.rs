@@ -5,7 +5,7 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use std::fs::{self, OpenOptions};
 use std::path::Path;

@@ -3,7 +3,7 @@
 //! stop honoured only between units, and a plan that waits with nothing in flight.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};

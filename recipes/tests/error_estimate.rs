@@ -4,7 +4,7 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use metaplate_core::scene::{Imperfection, Scene};
 use metaplate_dsp::excitation::ExcitationProtocol;

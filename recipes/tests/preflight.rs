@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use common::lab_and_plan;
 use metaplate_core::scene::Scene;

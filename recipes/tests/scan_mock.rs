@@ -2,7 +2,7 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use common::{BAND_HZ, error_db, lab_and_plan, median_and_worst, metamaterial, output, quick_config};
 use metaplate_recipes::scan::scan;

@@ -4,7 +4,7 @@
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use metaplate_dsp::accuracy::ERROR_BAND_HZ;
 use metaplate_dsp::excitation::ExcitationProtocol;

@@ -2,7 +2,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may unwrap: a panic is the test failing
 
-mod common;
+use crate::common;
 
 use common::{mock_driver, sine_at, two_channels};
 use metaplate_core::daq::{Daq, DaqChannel, DaqConfig, DaqError};

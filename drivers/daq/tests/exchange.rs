@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests may unwrap: a panic is the test failing
 
-mod common;
+use crate::common;
 
 use common::{Scripted, hex};
 use metaplate_core::daq::{Daq, DaqChannel, DaqConfig, DaqError};

@@ -8,7 +8,7 @@ use metaplate_drivers::{
     BACKENDS, Capability, DaqSection, HardwareError, HardwareFile, KeypadSection, backends, open_rig,
 };
 
-const EXAMPLE: &str = include_str!("../../../cli/hardware.example.toml");
+const EXAMPLE: &str = include_str!("../../../crates/cli/hardware.example.toml");
 
 fn parse(text: &str) -> Result<HardwareFile, HardwareError> {
     HardwareFile::parse(text, Path::new("rig.toml"))

@@ -1,7 +1,7 @@
 //! The signal chain through the real drivers: response, clocks, determinism, virtual time.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use std::time::Instant;
 

@@ -2,7 +2,7 @@
 //! and recovery after its window.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use metaplate_core::daq::DaqError;
 use metaplate_core::rig::Rig;

@@ -1,7 +1,7 @@
 //! Every imperfection switched off in the scene is gone from what the lab records (`Scene::without`).
 #![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
 
-mod common;
+use crate::common;
 
 use metaplate_core::rig::Rig;
 use metaplate_core::scene::{Imperfection, Scene};

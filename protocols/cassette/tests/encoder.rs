@@ -2,7 +2,7 @@
 //! Exact comparisons: limits are byte counts and the format is lossless.
 #![allow(clippy::unwrap_used)] // tests may unwrap: a panic is the test failing
 
-mod common;
+use crate::common;
 
 use common::{decode, header};
 use metaplate_cassette::{

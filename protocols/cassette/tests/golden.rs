@@ -2,7 +2,7 @@
 //! `struct` and `zlib.crc32`, script in the test comments). Exact equality throughout: the format is lossless.
 #![allow(clippy::unwrap_used)] // tests may unwrap: a panic is the test failing
 
-mod common;
+use crate::common;
 
 use common::{decode, decode_bytewise};
 use metaplate_cassette::{

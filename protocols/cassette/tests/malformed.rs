@@ -2,7 +2,7 @@
 //! Comparisons are exact: offsets, ordinals and counts are integers with one right answer.
 #![allow(clippy::unwrap_used)] // tests may unwrap: a panic is the test failing
 
-mod common;
+use crate::common;
 
 use common::{decode, decode_bytewise, errors, header, raw_record, raw_stream, records, reseal};
 use metaplate_cassette::{

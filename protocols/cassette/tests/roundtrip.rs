@@ -2,7 +2,7 @@
 //! Equality is exact: the format stores every field losslessly (f32 and f64 bit for bit).
 #![allow(clippy::unwrap_used)] // tests may unwrap: a panic is the test failing
 
-mod common;
+use crate::common;
 
 use common::decode_split;
 use metaplate_cassette::{

@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
+use crate::common;
 
 use common::{complex_values, decode, decode_in_chunks, function, nodes, real_values, units};
 use metaplate_uff::{ByteOrder, Format, FunctionType, Ordinate, Precision, UffEncoder, UffRecord};

@@ -1,0 +1,11 @@
+//! The crate's integration tests, one binary: each file a module.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
+
+mod common;
+mod integrity;
+mod proptest_roundtrip;
+mod python_readers;
+mod resume;
+mod roundtrip;
+mod writer_rules;

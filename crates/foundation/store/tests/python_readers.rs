@@ -1,0 +1,139 @@
+//! Polars and pyarrow read a dataset as it is, with no code of ours: `tests/python/read_dataset.py` checks row
+//! counts, column names and types, and a known impulse response. Needs a Python with polars and pyarrow:
+//! `$METAPLATE_PYTHON`, else the project's `.venv/bin/python` that `scripts/install-deps.sh` makes (`.ci/run`
+//! installs it and then runs this test explicitly).
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use crate::common;
+
+use std::process::Command;
+
+use common::{meta, records};
+use metaplate_store::{Dataset, DatasetDescription, DatasetMeta, DatasetWriter, IR_UNIT_M_S_PER_N, IfExists, compact};
+
+/// The test dataset's metadata, with its description (what the batch files' key-value metadata states).
+fn described_meta() -> DatasetMeta {
+    meta().with_description(DatasetDescription { ir_unit: IR_UNIT_M_S_PER_N.into(), pre_samples: 0 })
+}
+
+/// A dataset of 3 points x 2 actuators in two batch files, with an orphan file the journal does not list.
+fn dataset(dir: &std::path::Path) {
+    let mut writer = DatasetWriter::create(dir, described_meta(), IfExists::Refuse).unwrap();
+    writer.commit_batch(&records(&[(0, 0), (1, 0)], &[0, 3], 100)).unwrap();
+    writer.commit_batch(&records(&[(2, 1)], &[0, 3], 100)).unwrap();
+    drop(writer);
+    // An orphan (never journaled) that a directory glob would pick up, but the journal excludes.
+    std::fs::copy(dir.join("batches/batch-000000.parquet"), dir.join("batches/batch-000009.parquet")).unwrap();
+}
+
+#[test]
+#[ignore = "needs the project's .venv (scripts/install-deps.sh) with polars and pyarrow: run by .ci/run"]
+fn polars_and_pyarrow_read_the_committed_files() {
+    let dir = tempfile::tempdir().unwrap();
+    dataset(dir.path());
+    let dataset = Dataset::open(dir.path()).unwrap();
+    let ir = dataset.ir(6, 3).unwrap();
+    // Python floats are f64; an f32 widens exactly, so the comparison in the script is exact.
+    let head: Vec<f64> = ir[..8].iter().map(|&v| f64::from(v)).collect();
+    let meta = described_meta();
+    let file_metadata = serde_json::json!({
+        "metaplate.recipe": meta.recipe,
+        "metaplate.scene": meta.scene.name,
+        "metaplate.scene_hash": meta.scene.hash,
+        "metaplate.grid": {"nx": 4, "ny": 3, "spacing_m": 0.005, "origin_x_m": -0.0075, "origin_y_m": -0.005},
+        "metaplate.sample_rate_hz": "24000",
+        "metaplate.ir_unit": "m/s/N",
+        "metaplate.pre_samples": "0",
+        "metaplate.software_version": meta.software_version,
+        "metaplate.schema_version": "1",
+        "metaplate.seed": "7",
+    });
+    let expected = serde_json::json!({"rows": 6, "ir_len": 100, "point_index": 6, "actuator": 3, "ir_head": head,
+        "file_metadata": file_metadata});
+    let expected_path = dir.path().join("expected.json");
+    std::fs::write(&expected_path, expected.to_string()).unwrap();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/read_dataset.py");
+    let run = |what: &str| {
+        let out = Command::new(python()).arg(script).arg(dir.path()).arg(&expected_path).output().unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{what}: {stdout}{}", String::from_utf8_lossy(&out.stderr));
+    };
+    run("after commits");
+    compact(dir.path()).unwrap();
+    run("after compaction");
+}
+
+/// The README's reading example (between its `reading-example` markers), run on a dataset with an orphan file: it
+/// reads only the committed files, in polars and pyarrow, and its G[point, actuator, t] holds every response where
+/// it belongs.
+#[test]
+#[ignore = "needs the project's .venv (scripts/install-deps.sh) with polars, pyarrow and numpy: run by .ci/run"]
+fn the_readme_reading_example_runs() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../README.md")).unwrap();
+    let start = readme.find("<!-- reading-example:start -->").expect("README lacks the reading-example markers");
+    let end = readme.find("<!-- reading-example:end -->").unwrap();
+    let block = &readme[start..end];
+    let code = block.split("```python").nth(1).and_then(|b| b.split("```").next()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    dataset(dir.path());
+    let dataset = Dataset::open(dir.path()).unwrap();
+    // The script sees its dataset where the README's `run = Path(...)` line points.
+    let code = code
+        .lines()
+        .map(|l| if l.starts_with("run = Path(") { format!("run = Path({:?})", dir.path()) } else { l.to_owned() })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let (points, actuators) = (dataset.points().to_vec(), dataset.actuators().to_vec());
+    let expected = dataset.ir_matrix(&points, &actuators).unwrap();
+    let checks = format!(
+        "\nassert G.shape == ({}, {}, {}), G.shape\nassert G_pa.shape == G.shape\n\
+         assert G.ravel().tolist() == {:?}\nassert (G == G_pa).all()\nassert meta['metaplate.ir_unit'] == 'm/s/N'\n\
+         print('ok')\n",
+        points.len(),
+        actuators.len(),
+        dataset.ir_len(),
+        expected.iter().map(|&v| f64::from(v)).collect::<Vec<_>>(),
+    );
+    let script = dir.path().join("example.py");
+    std::fs::write(&script, code + &checks).unwrap();
+    let out = Command::new(python()).arg(&script).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && stdout.contains("ok"), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+}
+
+/// The interpreter with the cross-check packages: `$METAPLATE_PYTHON`, else the workspace's `.venv`.
+fn python() -> std::path::PathBuf {
+    if let Some(p) = std::env::var_os("METAPLATE_PYTHON") {
+        return p.into();
+    }
+    let venv = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../.venv/bin/python");
+    assert!(venv.exists(), "no {} and no METAPLATE_PYTHON: run scripts/install-deps.sh", venv.display());
+    venv
+}
+
+/// `Dataset::lazy` scans exactly the committed files, in the dataset's columns.
+#[cfg(feature = "polars")]
+#[test]
+fn the_polars_lazy_frame_reads_the_committed_rows() {
+    use polars::prelude::{DataType, col, lit};
+    let dir = tempfile::tempdir().unwrap();
+    let mut writer = DatasetWriter::create(dir.path(), meta(), IfExists::Refuse).unwrap();
+    writer.commit_batch(&records(&[(0, 0), (1, 0)], &[0, 3], 50)).unwrap();
+    writer.commit_batch(&records(&[(2, 1)], &[0, 3], 50)).unwrap();
+    drop(writer);
+    // An orphan that must not be scanned.
+    std::fs::copy(dir.path().join("batches/batch-000000.parquet"), dir.path().join("batches/batch-000009.parquet"))
+        .unwrap();
+    let frame = Dataset::lazy(dir.path()).unwrap().collect().unwrap();
+    assert_eq!(frame.height(), 6);
+    let schema = frame.schema();
+    assert_eq!(schema.get("point_index"), Some(&DataType::UInt32));
+    assert_eq!(schema.get("ir"), Some(&DataType::Array(Box::new(DataType::Float32), 50)));
+    let one = Dataset::lazy(dir.path())
+        .unwrap()
+        .filter(col("point_index").eq(lit(6u32)).and(col("actuator").eq(lit(3u16))))
+        .collect()
+        .unwrap();
+    assert_eq!(one.height(), 1);
+}

@@ -1,0 +1,10 @@
+//! The crate's integration tests, one binary: each file a module.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
+
+mod common;
+mod config_scale;
+mod examples;
+mod malformed;
+mod roundtrip;
+mod tracker;

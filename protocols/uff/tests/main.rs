@@ -1,0 +1,9 @@
+//! The crate's integration tests, one binary: each file a module.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
+
+mod common;
+mod malformed;
+mod pyuff_files;
+mod pyuff_reads;
+mod roundtrip;
