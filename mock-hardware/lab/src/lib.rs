@@ -23,7 +23,8 @@
 //!    full-scale sample, folded into the coil's force factor) and the actuator's voice coil
 //!    (`VoiceCoil::drive_to_force` at 48 kHz: cubic, gain spread, suspension high-pass, roll-off), giving force in N.
 //! 3. Force is convolved with the plate's Green's function from that actuator to the point under the beam (m/s
-//!    per N, [`metaplate_plate::greens_functions`], computed for the prepared points only, cached on disk).
+//!    per N, [`metaplate_plate::greens_functions`] for the prepared points; with a cache directory they are cut
+//!    from the one entry of the scene's physics and the lab's band, duration and rate, which holds every point).
 //! 4. The LDV turns velocity into its output voltage: noise `noise_rms_m_s / signal level` (the speckle level at
 //!    the spot, at least 0.05), dropouts (garbage across the range: random ones with the scene's
 //!    `dropout_probability` per playback, and the `ldv_dropout` windows; the next `SIG?` reads low), clipping at
@@ -191,7 +192,9 @@ pub enum LdvLink {
 pub struct LabOptions {
     /// Replaces the scene's seed (noise, dropouts, speckle, coil spread, garbled bytes).
     pub seed: Option<u64>,
-    /// Where Green's functions are cached (by scene hash and request); `None`: computed every time.
+    /// Where Green's functions are cached (one entry per scene physics, model options, band, duration and rate,
+    /// holding every point: labs preparing other points share it); `None`: computed every time, for the prepared
+    /// points only.
     pub cache_dir: Option<PathBuf>,
     /// Flat grid indices to prepare (`grid.len() + k`: actuator k's driving point); `None`: the scene's measured
     /// points and every driving point.

@@ -578,6 +578,16 @@ fn a_setup_table_changes_the_identity_not_the_physics() {
     noisier.name = "noisier".into();
     assert_eq!(noisier.physics_hash(), s.physics_hash());
     assert_ne!(Scene::builtin("homogeneous").unwrap().physics_hash(), s.physics_hash());
+    // A plate without resonator spread draws nothing from its seed: its seeds share one physics.
+    let plain = Scene::builtin("homogeneous").unwrap();
+    let mut plain_reseeded = plain.clone();
+    plain_reseeded.seed += 1;
+    assert_eq!(plain_reseeded.physics_hash(), plain.physics_hash());
+    let mut unspread = s.clone();
+    unspread.resonators.height_spread = 0.0;
+    let mut unspread_reseeded = unspread.clone();
+    unspread_reseeded.seed += 1;
+    assert_eq!(unspread_reseeded.physics_hash(), unspread.physics_hash());
 }
 
 #[test]

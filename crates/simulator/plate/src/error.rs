@@ -80,6 +80,11 @@ impl PlateError {
     pub(crate) fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
         Self::InvalidParameter { name, reason: reason.into() }
     }
+
+    /// Shorthand for [`PlateError::Cache`] about the file or directory at `path`.
+    pub(crate) fn cache(path: &std::path::Path, reason: impl ToString) -> Self {
+        Self::Cache { path: path.display().to_string(), reason: reason.to_string() }
+    }
 }
 
 /// Checks that `v` is finite and lies in `[lo, hi]`.

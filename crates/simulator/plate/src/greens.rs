@@ -175,7 +175,9 @@ impl SpectralPlan {
 impl PlateModel {
     /// Green's functions of this model for `request` (see the module documentation for the frequency grid), the
     /// frequency bins shared among [`crate::ModelOptions::threads`] threads. Deterministic: the same model and request
-    /// give bit-identical results whatever the thread count.
+    /// give bit-identical results whatever the thread count, and a response does not depend on which other points
+    /// and actuators are requested with it (each solve has a right-hand side for every actuator of the scene), so a
+    /// request cut from a larger one ([`crate::greens_functions`]'s cache) equals it bit for bit.
     ///
     /// # Errors
     /// As [`SpectralPlan::new`] and [`PlateModel::frequency_response`]; [`PlateError::TooLarge`] beyond
@@ -184,42 +186,11 @@ impl PlateModel {
         let (act, pts) = self.resolve(&request.actuators, &request.points)?;
         let plan = SpectralPlan::new(request, &|f| self.loss_factor_bound(f))?;
         let n_pairs = act.len() * pts.len();
-        let bytes = n_pairs as f64 * (plan.bins.len() as f64 * 16.0 + plan.ir_len as f64 * 8.0);
-        if bytes > MAX_GREENS_BYTES as f64 {
-            return Err(PlateError::TooLarge {
-                what: "Green's functions (bytes)",
-                needed: bytes as usize,
-                max: MAX_GREENS_BYTES,
-            });
-        }
-        let threads = self.options().threads.min(plan.bins.len()).max(1);
-        // Bin-major spectra: each bin's solve writes one contiguous row.
-        let mut spectra = vec![Complex64::new(0.0, 0.0); plan.bins.len() * n_pairs];
-        let mut rows: Vec<(usize, &mut [Complex64])> = spectra.chunks_mut(n_pairs).enumerate().collect();
-        run_interleaved(&mut rows, threads, |chunk| {
-            let mut ws = Workspace::new(self, act.len())?;
-            for (b, row) in chunk.iter_mut() {
-                ws.solve(self, plan.bins[*b].1, &act, &pts, row)?;
-            }
-            Ok(())
+        check_bytes(n_pairs as f64 * (plan.bins.len() as f64 * 16.0 + plan.ir_len as f64 * 8.0))?;
+        let spectra = self.band_spectra(&plan, &act, &pts)?;
+        let data = impulse_responses(&plan, request.sample_rate_hz, self.options().threads, n_pairs, &|pair, b| {
+            spectra[b * n_pairs + pair]
         })?;
-        let mut data = vec![0.0; n_pairs * plan.ir_len];
-        let mut irs: Vec<(usize, &mut [f64])> = data.chunks_mut(plan.ir_len).enumerate().collect();
-        let fade = window::fade_out(((FADE_OUT_S * request.sample_rate_hz).round() as usize).min(plan.ir_len / 10));
-        run_interleaved(&mut irs, threads, |chunk| {
-            let mut spectrum = vec![Complex64::new(0.0, 0.0); fft::bin_count(plan.fft_len)];
-            for (pair, ir) in chunk.iter_mut() {
-                for (b, &(k, _, gain)) in plan.bins.iter().enumerate() {
-                    spectrum[k] = spectra[b * n_pairs + *pair] * gain;
-                }
-                let full = fft::inverse(&spectrum, plan.fft_len)?;
-                ir.copy_from_slice(&full[..plan.ir_len]);
-                let start = plan.ir_len - fade.len();
-                ir[start..].iter_mut().zip(&fade).for_each(|(v, g)| *v *= g);
-            }
-            Ok(())
-        })?;
-        metaplate_dsp::error::check_result("Green's functions", &data)?;
         Ok(GreensFunctions {
             sample_rate_hz: request.sample_rate_hz,
             ir_len: plan.ir_len,
@@ -228,6 +199,79 @@ impl PlateModel {
             data,
         })
     }
+
+    /// The spectra at `plan`'s bins from `actuators` (checked scene indices) to `points` (interpolation weights),
+    /// bin-major: bin `b`'s row holds `points.len() * actuators.len()` values, point-major. Every bin solves for
+    /// all of the scene's actuators and reads out the requested ones.
+    pub(crate) fn band_spectra(
+        &self,
+        plan: &SpectralPlan,
+        actuators: &[usize],
+        points: &[&[(usize, f64)]],
+    ) -> Result<Vec<Complex64>, PlateError> {
+        let n_pairs = actuators.len() * points.len();
+        let rhs = self.actuator_weights();
+        let threads = self.options().threads.min(plan.bins.len()).max(1);
+        // Bin-major spectra: each bin's solve writes one contiguous row.
+        let mut spectra = vec![Complex64::new(0.0, 0.0); plan.bins.len() * n_pairs];
+        let mut rows: Vec<(usize, &mut [Complex64])> = spectra.chunks_mut(n_pairs).enumerate().collect();
+        run_interleaved(&mut rows, threads, |chunk| {
+            let mut ws = Workspace::new(self, rhs.len())?;
+            for (b, row) in chunk.iter_mut() {
+                ws.solve(self, plan.bins[*b].1, &rhs, actuators, points, row)?;
+            }
+            Ok(())
+        })?;
+        Ok(spectra)
+    }
+}
+
+/// Checks the memory a computation needs, bytes, against [`MAX_GREENS_BYTES`].
+pub(crate) fn check_bytes(bytes: f64) -> Result<(), PlateError> {
+    if bytes > MAX_GREENS_BYTES as f64 {
+        return Err(PlateError::TooLarge {
+            what: "Green's functions (bytes)",
+            needed: bytes as usize,
+            max: MAX_GREENS_BYTES,
+        });
+    }
+    Ok(())
+}
+
+/// The impulse responses of `n_pairs` pairs, pair-major (`plan.ir_len` samples each), from their band spectra:
+/// `spectrum(pair, b)` is the pair's value at `plan.bins[b]`. Each response is the inverse FFT of the spectrum times
+/// the band gains (zero outside the band), cut to `plan.ir_len` samples with a short fade-out; the pairs are shared
+/// among `threads` threads (the result does not depend on it). Every path to a response goes through here, so a
+/// response synthesised from stored spectra equals the directly computed one bit for bit.
+///
+/// # Errors
+/// [`PlateError::Dsp`] from the FFT; [`PlateError::NonFiniteResult`].
+pub(crate) fn impulse_responses(
+    plan: &SpectralPlan,
+    sample_rate_hz: f64,
+    threads: usize,
+    n_pairs: usize,
+    spectrum: &(dyn Fn(usize, usize) -> Complex64 + Sync),
+) -> Result<Vec<f64>, PlateError> {
+    let mut data = vec![0.0; n_pairs * plan.ir_len];
+    let mut irs: Vec<(usize, &mut [f64])> = data.chunks_mut(plan.ir_len).enumerate().collect();
+    let fade = window::fade_out(((FADE_OUT_S * sample_rate_hz).round() as usize).min(plan.ir_len / 10));
+    let threads = threads.min(n_pairs).max(1);
+    run_interleaved(&mut irs, threads, |chunk| {
+        let mut full_spectrum = vec![Complex64::new(0.0, 0.0); fft::bin_count(plan.fft_len)];
+        for (pair, ir) in chunk.iter_mut() {
+            for (b, &(k, _, gain)) in plan.bins.iter().enumerate() {
+                full_spectrum[k] = spectrum(*pair, b) * gain;
+            }
+            let full = fft::inverse(&full_spectrum, plan.fft_len)?;
+            ir.copy_from_slice(&full[..plan.ir_len]);
+            let start = plan.ir_len - fade.len();
+            ir[start..].iter_mut().zip(&fade).for_each(|(v, g)| *v *= g);
+        }
+        Ok(())
+    })?;
+    metaplate_dsp::error::check_result("Green's functions", &data)?;
+    Ok(data)
 }
 
 /// Runs `work` on `threads` interleaved shares of `items` (item i goes to thread i mod threads), returning the first

@@ -6,7 +6,8 @@
 //! naturally), pads as damped springs, rods homogenised as resonant added mass or rocking inertia
 //! (`resonators` module docs). [`PlateModel::frequency_response`] solves one frequency (one sparse LU, a right-hand
 //! side per actuator); [`greens_functions`] computes impulse responses for the requested band, points and actuators
-//! only, on a frequency grid fine enough not to time-alias, across threads, cached on disk by scene hash and request.
+//! on a frequency grid fine enough not to time-alias, across threads, cached on disk: one entry per scene physics,
+//! model options, band, duration and sample rate holds every point and actuator, and every request is cut from it.
 //! [`actuator::VoiceCoil`] turns drive signals into forces (suspension resonance, roll-off, unit spread, weak cubic
 //! nonlinearity).
 //!
@@ -16,6 +17,8 @@
 pub mod actuator;
 mod bending;
 mod cache;
+mod entry;
+mod entry_file;
 pub mod error;
 mod greens;
 mod mesh;

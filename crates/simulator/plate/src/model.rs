@@ -265,28 +265,43 @@ impl PlateModel {
         crate::error::check_range("freq_hz", freq_hz, f64::MIN_POSITIVE, 24_000.0)?;
         let mut ws = Workspace::new(self, actuators.len())?;
         let mut out = vec![Complex64::new(0.0, 0.0); points.len() * actuators.len()];
-        ws.solve(self, freq_hz, &act, &pts, &mut out)?;
+        let rhs: Vec<&[(usize, f64)]> = act.iter().map(|&a| self.actuators[a].as_slice()).collect();
+        let columns: Vec<usize> = (0..act.len()).collect();
+        ws.solve(self, freq_hz, &rhs, &columns, &pts, &mut out)?;
         Ok(out)
     }
 
-    /// Checks indices and returns the interpolation weights of the requested actuators and points.
+    /// The interpolation weights of every actuator, in scene order: the right-hand sides of a Green's-function
+    /// solve, which always solves for all of them (see [`crate::PlateModel::greens_functions`]).
+    pub(crate) fn actuator_weights(&self) -> Vec<&[(usize, f64)]> {
+        self.actuators.iter().map(Vec::as_slice).collect()
+    }
+
+    /// The interpolation weights of every point a request may address (grid points, then driving points), `None`
+    /// for a grid point off the plate.
+    pub(crate) fn point_weights(&self) -> Vec<Option<&[(usize, f64)]>> {
+        self.points.iter().map(|p| p.as_ref().ok().map(Vec::as_slice)).collect()
+    }
+
+    /// Checks indices and returns the requested actuators (checked scene indices) and the interpolation weights of
+    /// the requested points.
     #[allow(clippy::type_complexity)]
     pub(crate) fn resolve<'a>(
         &'a self,
         actuators: &[usize],
         points: &[usize],
-    ) -> Result<(Vec<&'a [(usize, f64)]>, Vec<&'a [(usize, f64)]>), PlateError> {
+    ) -> Result<(Vec<usize>, Vec<&'a [(usize, f64)]>), PlateError> {
         if actuators.is_empty() || points.is_empty() {
             return Err(PlateError::invalid("actuators/points", "need at least one actuator and one point"));
         }
         let act = actuators
             .iter()
             .map(|&a| {
-                self.actuators.get(a).map(Vec::as_slice).ok_or(PlateError::IndexOutOfRange {
-                    what: "actuator",
-                    index: a,
-                    len: self.actuators.len(),
-                })
+                if a < self.actuators.len() {
+                    Ok(a)
+                } else {
+                    Err(PlateError::IndexOutOfRange { what: "actuator", index: a, len: self.actuators.len() })
+                }
             })
             .collect::<Result<Vec<_>, _>>()?;
         let pts = points
@@ -371,12 +386,15 @@ impl Workspace {
         })
     }
 
-    /// Velocity per unit force at `freq_hz` into `out` (`points.len() * actuators.len()`, point-major).
+    /// Velocity per unit force at `freq_hz` into `out` (`points.len() * columns.len()`, point-major): one solve
+    /// with a right-hand side per entry of `rhs` (force weights; at most the workspace's `n_rhs`), read out at
+    /// `points` for the right-hand sides `columns` (positions in `rhs`), in that order.
     pub fn solve(
         &mut self,
         model: &PlateModel,
         freq_hz: f64,
-        actuators: &[&[(usize, f64)]],
+        rhs: &[&[(usize, f64)]],
+        columns: &[usize],
         points: &[&[(usize, f64)]],
         out: &mut [Complex64],
     ) -> Result<(), PlateError> {
@@ -389,7 +407,7 @@ impl Workspace {
             .factorize_numeric_lu(&mut self.numeric, a, Par::Seq, stack, Default::default())
             .map_err(|e| PlateError::Solve { freq_hz, reason: format!("{e:?}") })?;
         self.rhs.fill(Complex64::new(0.0, 0.0));
-        for (col, weights) in actuators.iter().enumerate() {
+        for (col, weights) in rhs.iter().enumerate() {
             for &(n, w) in weights.iter() {
                 self.rhs[(n, col)] = Complex64::new(w, 0.0);
             }
@@ -397,13 +415,13 @@ impl Workspace {
         lu.solve_in_place_with_conj(Conj::No, self.rhs.as_mut(), Par::Seq, MemStack::new(&mut self.mem));
         let i_omega = Complex64::new(0.0, omega);
         for (p, weights) in points.iter().enumerate() {
-            for a in 0..actuators.len() {
+            for (c, &a) in columns.iter().enumerate() {
                 let w: Complex64 = weights.iter().map(|&(n, c)| self.rhs[(n, a)] * c).sum();
                 let v = i_omega * w;
                 if !(v.re.is_finite() && v.im.is_finite()) {
                     return Err(PlateError::NonFiniteResult { what: "plate response" });
                 }
-                out[p * actuators.len() + a] = v;
+                out[p * columns.len() + c] = v;
             }
         }
         Ok(())

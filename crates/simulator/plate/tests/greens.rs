@@ -1,8 +1,11 @@
-//! Green's functions: determinism, the no-time-aliasing rule, the cache, and refusals.
+//! Green's functions: determinism, the no-time-aliasing rule, the cache (one entry per settings, every request cut
+//! from it bit for bit), and refusals.
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
 
 use metaplate_core::scene::Scene;
-use metaplate_plate::{GreensRequest, ModelOptions, PlateError, PlateModel, SpectralPlan, greens_functions};
+use metaplate_plate::{
+    GreensFunctions, GreensRequest, ModelOptions, PlateError, PlateModel, SpectralPlan, cache_key, greens_functions,
+};
 
 fn small_request(scene: &Scene, duration_s: f64) -> GreensRequest {
     let points = scene.measured_points();
@@ -51,23 +54,136 @@ fn the_frequency_grid_does_not_time_alias() {
     }
 }
 
+/// A fresh scratch cache directory of this process (no tempfile dependency in this crate).
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("metaplate-plate-cache-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The samples' bit patterns (`==` on f64 would let 0.0 equal -0.0).
+fn bits(g: &GreensFunctions) -> Vec<u64> {
+    g.data.iter().map(|v| v.to_bits()).collect()
+}
+
+/// The cache's one file in `dir` (no temporary or claim left behind).
+fn only_file(dir: &std::path::Path) -> std::path::PathBuf {
+    let files: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(files.len(), 1, "one entry file, nothing else: {files:?}");
+    files[0].clone()
+}
+
+/// The representation word of an entry file's header (0 impulse responses, 1 band spectra; see the format).
+fn representation(path: &std::path::Path) -> u64 {
+    let bytes = std::fs::read(path).unwrap();
+    u64::from_le_bytes(bytes[40..48].try_into().unwrap())
+}
+
 #[test]
-fn cache_round_trips_and_ignores_a_corrupt_file() {
+fn every_request_is_cut_from_one_entry_bit_for_bit_as_computed_alone() {
+    // The default lattice: there a sparse solve's last bits depend on how many right-hand sides it has, so this
+    // also checks that every solve is made for all actuators (a request for two equals the full entry's).
+    let scene = Scene::builtin("homogeneous").unwrap();
+    let options = ModelOptions { refinement: 2, threads: 2 };
+    let model = PlateModel::from_scene(&scene, &options).unwrap();
+    let (grid_len, measured) = (scene.grid.len(), scene.measured_points());
+    // At 24 kHz the entry holds band spectra (synthesised at each cut), at 800 Hz impulse responses (copied).
+    for (sample_rate_hz, duration_s, stored_as) in [(24_000.0, 0.05, 1), (800.0, 0.04, 0)] {
+        let dir = scratch(&format!("cut-{sample_rate_hz}"));
+        let request = GreensRequest {
+            // Out of order, repeated, a driving point among grid points; actuators out of order, a subset.
+            points: vec![measured[500], grid_len + 3, measured[40], measured[500]],
+            actuators: vec![6, 1],
+            band_hz: (300.0, 400.0),
+            duration_s,
+            sample_rate_hz,
+        };
+        let direct = model.greens_functions(&request).unwrap();
+        let computed = greens_functions(&scene, &options, &request, Some(&dir)).unwrap();
+        let loaded = greens_functions(&scene, &options, &request, Some(&dir)).unwrap();
+        assert_eq!(
+            (&computed.points, &computed.actuators, computed.ir_len),
+            (&direct.points, &direct.actuators, direct.ir_len)
+        );
+        assert_eq!(bits(&computed), bits(&direct), "{sample_rate_hz} Hz: the entry's cut equals the request alone");
+        assert_eq!(bits(&loaded), bits(&direct), "{sample_rate_hz} Hz: and so does the cut from the file");
+        let file = only_file(&dir);
+        assert_eq!(representation(&file), stored_as, "{sample_rate_hz} Hz");
+        // Another subset, all actuators: served by the same entry (no second file), still bit for bit.
+        let other = GreensRequest { points: vec![measured[900], grid_len], actuators: (0..8).collect(), ..request };
+        let cut = greens_functions(&scene, &options, &other, Some(&dir)).unwrap();
+        assert_eq!(bits(&cut), bits(&model.greens_functions(&other).unwrap()), "{sample_rate_hz} Hz");
+        assert_eq!(only_file(&dir), file);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[test]
+fn cache_round_trips_and_ignores_a_truncated_damaged_or_stale_file() {
     let scene = Scene::builtin("homogeneous").unwrap();
     let options = ModelOptions { refinement: 1, threads: 2 };
     let request = small_request(&scene, 0.05);
-    let dir = std::env::temp_dir().join(format!("metaplate-plate-cache-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("round-trip");
     let computed = greens_functions(&scene, &options, &request, Some(&dir)).unwrap();
-    let files: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
-    assert_eq!(files.len(), 1, "one cache file, no temporary left behind: {files:?}");
+    let file = only_file(&dir);
     let cached = greens_functions(&scene, &options, &request, Some(&dir)).unwrap();
     assert_eq!(computed, cached);
-    // Truncate the file: it must be ignored and rewritten, not trusted.
-    let bytes = std::fs::read(&files[0]).unwrap();
-    std::fs::write(&files[0], &bytes[..bytes.len() / 2]).unwrap();
-    assert_eq!(greens_functions(&scene, &options, &request, Some(&dir)).unwrap(), computed);
-    assert_eq!(std::fs::read(&files[0]).unwrap(), bytes);
+    let bytes = std::fs::read(&file).unwrap();
+    // Truncated, a flipped bit in a block (the last one: not necessarily a requested point's, so look the whole
+    // entry up), a flipped bit in the header, another format's file: each is ignored and the entry rewritten.
+    let mut damaged_block = bytes.clone();
+    *damaged_block.last_mut().unwrap() ^= 0x10;
+    let mut damaged_header = bytes.clone();
+    damaged_header[80] ^= 0x01; // the first bin's frequency: only the header's checksum tells
+    let mut stale = bytes.clone();
+    stale[..8].copy_from_slice(b"MPGREEN1");
+    let mut all_points = scene.measured_points();
+    all_points.extend((0..scene.actuators.len()).map(|k| scene.grid.len() + k));
+    let everything = GreensRequest { points: all_points, ..request.clone() };
+    for (what, content) in [
+        ("truncated", &bytes[..bytes.len() / 2]),
+        ("damaged block", &damaged_block[..]),
+        ("damaged header", &damaged_header[..]),
+        ("stale format", &stale[..]),
+    ] {
+        std::fs::write(&file, content).unwrap();
+        let got = greens_functions(&scene, &options, &everything, Some(&dir)).unwrap();
+        assert!(got.data.iter().all(|v| v.is_finite()), "{what}");
+        assert_eq!(std::fs::read(&file).unwrap(), bytes, "{what}: the entry is rewritten whole");
+        assert_eq!(greens_functions(&scene, &options, &request, Some(&dir)).unwrap(), computed, "{what}");
+    }
+    // The key ignores the points and actuators, and nothing else of the request.
+    let key = |r: &GreensRequest| cache_key(scene.physics_hash(), &options, r);
+    assert_eq!(key(&request), key(&GreensRequest { points: vec![1], actuators: vec![0], ..request.clone() }));
+    assert_ne!(key(&request), key(&GreensRequest { duration_s: 0.06, ..request.clone() }));
+    assert_ne!(key(&request), key(&GreensRequest { band_hz: (300.0, 401.0), ..request.clone() }));
+    assert_ne!(key(&request), key(&GreensRequest { sample_rate_hz: 48_000.0, ..request.clone() }));
+    assert_ne!(key(&request), cache_key(scene.physics_hash(), &ModelOptions { refinement: 2, ..options }, &request));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_request_the_model_refuses_is_refused_through_the_cache_too() {
+    let scene = Scene::builtin("homogeneous").unwrap();
+    let options = ModelOptions { refinement: 1, threads: 2 };
+    let ok = small_request(&scene, 0.05);
+    let dir = scratch("refuse");
+    // Before the entry exists (refused before any computation: no file) and once it does.
+    for stored in [false, true] {
+        let bad = |r: GreensRequest| greens_functions(&scene, &options, &r, Some(&dir)).unwrap_err();
+        assert!(matches!(bad(GreensRequest { points: vec![0], ..ok.clone() }), PlateError::OffPlate { .. }), "corner");
+        assert!(matches!(bad(GreensRequest { actuators: vec![8], ..ok.clone() }), PlateError::IndexOutOfRange { .. }));
+        assert!(matches!(
+            bad(GreensRequest { points: vec![scene.grid.len() + 8], ..ok.clone() }),
+            PlateError::IndexOutOfRange { .. }
+        ));
+        assert!(matches!(bad(GreensRequest { points: vec![], ..ok.clone() }), PlateError::InvalidParameter { .. }));
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), usize::from(stored));
+        if !stored {
+            greens_functions(&scene, &options, &ok, Some(&dir)).unwrap();
+        }
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -12,8 +12,8 @@
 
 use std::fmt::Write as _;
 
-use super::Scene;
 use super::file::SceneFile;
+use super::{ResonatorModel, Scene};
 
 /// Version of the canonical form; the first line of the text is `metaplate-scene-canonical-v{VERSION}`.
 pub const CANONICAL_FORM_VERSION: u32 = 1;
@@ -33,8 +33,8 @@ pub(super) fn canonical_text(scene: &Scene) -> String {
     out
 }
 
-/// Top-level keys of the file form that the simulated plate's response depends on: the seed (resonator spread),
-/// the plate, its supports and resonators, the actuators' positions and the grid. Not the name, the voice coils
+/// Top-level keys of the file form that the simulated plate's response depends on: the seed (resonator spread;
+/// left out when the scene has no spread to draw, so the plain plate's seeds share one physics), the plate, its supports and resonators, the actuators' positions and the grid. Not the name, the voice coils
 /// (the top-level `voice_coil` and each actuator's: they turn the drive into force, which the plate model never
 /// sees, so an error budget that switches their spread or nonlinearity off shares the plate's Green's functions),
 /// the instruments, the faults or the setup.
@@ -47,6 +47,10 @@ pub(super) fn physics_text(scene: &Scene) -> String {
     match toml::Value::try_from(SceneFile::from(scene.clone())) {
         Ok(toml::Value::Table(mut table)) => {
             table.retain(|key, _| PHYSICS_KEYS.contains(&key));
+            // The seed draws only the rods' height spread: without rods or spread, every seed is the same plate.
+            if scene.resonators.model == ResonatorModel::None || scene.resonators.height_spread == 0.0 {
+                table.remove("seed");
+            }
             if let Some(toml::Value::Array(actuators)) = table.get_mut("actuators") {
                 for actuator in actuators.iter_mut() {
                     if let toml::Value::Table(entry) = actuator {
