@@ -75,7 +75,7 @@ impl Follower {
     /// Looks at the directory again; returns whether anything the snapshot shows changed. A directory emptied, or
     /// holding another dataset than before (deleted and started again), is followed from scratch.
     pub fn poll(&mut self) -> bool {
-        test_poll_pause();
+        metaplate_store::test_hook::pause_from_env(TEST_POLL_PAUSE_ENV);
         let mut changed = false;
         let manifest_stamp = stamp_of(&self.dir.join(MANIFEST_FILE));
         if manifest_stamp != self.manifest_stamp {
@@ -163,19 +163,9 @@ impl Follower {
 const LOG_TAIL_BYTES: u64 = 6 * 1024;
 
 /// Test hook, not an API: the environment variable a test sets to a number of milliseconds every poll then takes
-/// before it reads anything, as on a slow disk. Read once per process; unset (or not a number) means no pause.
+/// before it reads anything, as on a slow disk (`metaplate_store::test_hook`); unset (or not a number) means no pause.
 #[doc(hidden)]
 pub const TEST_POLL_PAUSE_ENV: &str = "METAPLATE_TEST_POLL_PAUSE_MS";
-
-/// Sleeps as [`TEST_POLL_PAUSE_ENV`] says (nothing when it is unset).
-fn test_poll_pause() {
-    static PAUSE_MS: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
-    let ms =
-        *PAUSE_MS.get_or_init(|| std::env::var(TEST_POLL_PAUSE_ENV).ok().and_then(|v| v.parse().ok()).unwrap_or(0));
-    if ms > 0 {
-        std::thread::sleep(std::time::Duration::from_millis(ms));
-    }
-}
 
 /// The run's log (`scan.log`, `calibrate.log`, or any `*.log`) in `dir`.
 fn log_path(dir: &Path, recipe: &str) -> Option<PathBuf> {

@@ -12,7 +12,7 @@
 //! batches it lists in `supersedes`), `quarantine` (a file taken out of the dataset by resume, with the reason) and
 //! `forced-resume` (a resume that accepted a changed configuration, with the differences).
 
-use std::fs::{self, File, OpenOptions, TryLockError};
+use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
@@ -335,11 +335,7 @@ impl JournalWriter {
 
     fn locked(file: File, dir: &Path, len: u64, next_seq: u64) -> Result<Self, StoreError> {
         let path = dir.join(JOURNAL_FILE);
-        match file.try_lock() {
-            Ok(()) => {}
-            Err(TryLockError::WouldBlock) => return Err(StoreError::Locked { path }),
-            Err(TryLockError::Error(e)) => return Err(StoreError::from_io("lock", path, e)),
-        }
+        crate::lock::try_lock_exclusive(&file, &path)?;
         Ok(Self { file, dir: dir.to_path_buf(), path, len, next_seq, broken: None })
     }
 

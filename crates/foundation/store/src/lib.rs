@@ -27,12 +27,14 @@ mod index;
 pub mod journal;
 #[cfg(feature = "polars")]
 mod lazy;
+pub mod lock;
 pub mod manifest;
 mod reader;
 pub mod record;
 mod resume;
 pub mod schema;
 mod space;
+pub mod test_hook;
 pub mod wav;
 mod writer;
 
@@ -41,6 +43,7 @@ pub use compact::{CompactReport, compact};
 pub use durable::{sync_dir, write_bytes};
 pub use error::StoreError;
 pub use journal::{JOURNAL_FILE, JournalCommit, JournalIssue, JournalView};
+pub use lock::{LockHolder, try_lock_exclusive};
 pub use manifest::{
     BATCH_DIR, BatchInfo, DatasetDescription, DatasetMeta, GridSpec, IR_UNIT_M_S_PER_N, MANIFEST_FILE, Manifest,
     SCHEMA_VERSION, SceneId,

@@ -160,7 +160,7 @@ impl DatasetWriter {
             supersedes: Vec::new(),
             state,
         };
-        test_commit_pause();
+        crate::test_hook::pause_from_env(TEST_COMMIT_PAUSE_ENV);
         if let Err(e) = self.journal.append(&JournalEntry::Batch(entry.clone()), &self.budget) {
             // Not committed. When the journal was cut back cleanly the file is surely uncommitted: take it back (best
             // effort; a leftover is an orphan that resume quarantines). When the journal's state is unknown, leave
@@ -228,19 +228,9 @@ impl DatasetWriter {
 
 /// Test hook, not an API: the environment variable a crash test sets to a number of milliseconds that every commit
 /// then sleeps between making its batch file durable (renamed into `batches/`) and appending its journal line, so
-/// that a kill can land inside a commit. Read once per process; unset (or not a number) means no pause.
+/// that a kill can land inside a commit ([`crate::test_hook`]); unset (or not a number) means no pause.
 #[doc(hidden)]
 pub const TEST_COMMIT_PAUSE_ENV: &str = "METAPLATE_TEST_COMMIT_PAUSE_MS";
-
-/// Sleeps as [`TEST_COMMIT_PAUSE_ENV`] says (nothing when it is unset).
-fn test_commit_pause() {
-    static PAUSE_MS: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
-    let ms =
-        *PAUSE_MS.get_or_init(|| std::env::var(TEST_COMMIT_PAUSE_ENV).ok().and_then(|v| v.parse().ok()).unwrap_or(0));
-    if ms > 0 {
-        std::thread::sleep(std::time::Duration::from_millis(ms));
-    }
-}
 
 /// Makes `dir` an empty directory, or refuses.
 fn prepare_dir(dir: &Path, if_exists: IfExists) -> Result<(), StoreError> {
