@@ -1,2 +1,30 @@
 //! Datasets to and from other tools' files: a dataset exported as universal files (UFF 58/58b with 164 units and
-//! 2411 nodes) for modal-analysis tools, and universal files written by other tools imported as a dataset.
+//! 2411 nodes) for modal-analysis tools ([`export()`]), and universal files written by other tools (or by
+//! [`export()`]) imported as a dataset through the store's writer ([`import()`]).
+//!
+//! Both stream: an export reads one batch file at a time and an import holds one batch of rows, so a dataset of
+//! any size passes in bounded memory. Both report their progress to a callback ([`Progress`]), so that the caller
+//! draws it as it likes (the binary: a progress bar on stderr).
+//!
+//! The ID lines of an exported record ([`IdLines`]) carry what an import needs to rebuild the dataset exactly
+//! (key, grid, scene, row quality, source); a file without them (another tool's) is placed by its nodes.
+
+mod convert;
+mod error;
+pub mod export;
+mod id_lines;
+pub mod import;
+
+pub use error::InterchangeError;
+pub use export::{ExportOptions, ExportSummary, actuator_sites, default_out, export};
+pub use id_lines::IdLines;
+pub use import::{ImportOptions, ImportSummary, import};
+
+/// How far an export or import is: `done` of `total` responses (a response: one (point, actuator) pair).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Progress {
+    /// Responses written (export) or committed (import) so far.
+    pub done: u64,
+    /// Responses in all.
+    pub total: u64,
+}

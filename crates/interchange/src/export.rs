@@ -1,0 +1,269 @@
+//! A dataset as a universal file (UFF datasets 164, 2411 and 58 or 58b), streamed.
+//!
+//! The file holds, in this order: dataset 164 (SI units); dataset 2411 (one node per grid point the dataset
+//! commits, labelled `point_index + 1`, at its nominal grid position, z = 0; then one reference node per actuator,
+//! labelled `nx * ny + 1 + actuator`, at the actuator's magnet); then per committed (point, actuator) one dataset
+//! 58/58b: the impulse response (function type 1, time from `-pre_samples / fs`), and with
+//! [`ExportOptions::frequency`] also the frequency response (type 4: the FFT of the impulse response referred to time
+//! 0, 0 Hz to Nyquist, complex). Ordinates are velocity (m/s) over force (N) for a dataset whose `ir` is in m/s/N;
+//! otherwise over "full-scale drive" (data type 0, unknown), as the dataset's description says.
+//!
+//! The ID lines carry what an import needs to rebuild the dataset exactly ([`IdLines`](crate::IdLines)); other tools show them as
+//! text.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use metaplate_core::grid::{GridSpec, GridSubset};
+use metaplate_core::scene::Scene;
+use metaplate_dsp::fft;
+use metaplate_store::{BatchRows, Dataset, DatasetMeta, IR_UNIT_M_S_PER_N, Manifest, ReadOptions};
+use metaplate_uff::{
+    AxisCharacteristics, Complex64, Format, FunctionHeader, FunctionType, Node, Nodes2411, OrdinateRef, Precision,
+    UffEncoder, UffRecord, Units164,
+};
+
+use crate::Progress;
+use crate::error::{InterchangeError, refuse};
+use crate::id_lines::SharedIds;
+
+/// How to export.
+#[derive(Debug, Clone, Copy)]
+pub struct ExportOptions {
+    /// ASCII or binary (with its byte order).
+    pub format: Format,
+    /// Single or double precision.
+    pub precision: Precision,
+    /// Also write the frequency response functions.
+    pub frequency: bool,
+    /// Only these points of the grid (an evenly spread subset); all when `None`.
+    pub points: Option<GridSubset>,
+}
+
+/// What an export wrote.
+#[derive(Debug, Clone, Copy)]
+pub struct ExportSummary {
+    /// Datasets 58/58b written.
+    pub records: u64,
+    /// Bytes written.
+    pub bytes: u64,
+    /// Wall-clock seconds.
+    pub elapsed_s: f64,
+}
+
+/// `DIR.uff` beside the dataset directory `DIR`.
+///
+/// # Errors
+/// [`InterchangeError::Refused`] for a path without a directory name (`/`, `..`).
+pub fn default_out(data: &Path) -> Result<PathBuf, InterchangeError> {
+    let Some(name) = data.file_name() else { refuse!("--data {} has no directory name: give --out", data.display()) };
+    let mut file = name.to_os_string();
+    file.push(".uff");
+    Ok(data.with_file_name(file))
+}
+
+/// The actuators' magnet positions (x, y), m, indexed by actuator number: from the scene file `scene_file`, else
+/// from the built-in scene of the dataset in `data` when its id matches.
+///
+/// # Errors
+/// An unreadable scene file or dataset; [`InterchangeError::Refused`] when the dataset's scene is not a built-in
+/// one and no scene file is given.
+pub fn actuator_sites(data: &Path, scene_file: Option<&Path>) -> Result<Vec<(f64, f64)>, InterchangeError> {
+    let scene = match scene_file {
+        Some(path) => Scene::load(path)
+            .map_err(|source| InterchangeError::Scene { what: format!("reading scene {}", path.display()), source })?,
+        None => {
+            let manifest = Manifest::read(data).map_err(|source| InterchangeError::Dataset {
+                what: format!("opening dataset {}", data.display()),
+                source,
+            })?;
+            let id = &manifest.meta.scene;
+            match Scene::builtin(&id.name).ok().filter(|s| s.id() == *id) {
+                Some(scene) => scene,
+                None => refuse!(
+                    "the actuators' positions are unknown: the dataset's scene {:?} is not a built-in one; give the \
+                     scene file with --scene",
+                    id.name
+                ),
+            }
+        }
+    };
+    Ok(scene.actuators.iter().map(|a| (a.x_m, a.y_m)).collect())
+}
+
+/// Writes the dataset in `data` to the universal file `out`, streaming (one batch file at a time);
+/// `actuator_sites` are the reference nodes' positions, m, indexed by actuator number. `progress` is told each
+/// response written, out of the committed responses of the selected points.
+///
+/// # Errors
+/// An unreadable dataset, an actuator without a position, a value the format cannot hold, a failed write.
+pub fn export(
+    data: &Path,
+    out: &Path,
+    options: &ExportOptions,
+    actuator_sites: &[(f64, f64)],
+    mut progress: impl FnMut(Progress),
+) -> Result<ExportSummary, InterchangeError> {
+    let started = std::time::Instant::now();
+    let manifest = Manifest::read(data)
+        .map_err(|source| InterchangeError::Dataset { what: format!("opening dataset {}", data.display()), source })?;
+    let meta = &manifest.meta;
+    let grid = meta.grid;
+    let selected: Option<Vec<bool>> = match options.points {
+        Some(subset) => {
+            let mut mask = vec![false; grid.len()];
+            let indices = subset
+                .indices(&grid)
+                .map_err(|source| InterchangeError::Grid { what: format!("--points {subset}"), source })?;
+            for i in indices {
+                mask[i] = true;
+            }
+            Some(mask)
+        }
+        None => None,
+    };
+    let wanted = |point: u32| selected.as_ref().is_none_or(|m| m.get(point as usize).copied().unwrap_or(false));
+    let keys = Dataset::committed_keys(data)?.unwrap_or_default();
+    let mut points: Vec<u32> = keys.iter().map(|k| k.0).filter(|&p| wanted(p)).collect();
+    points.dedup();
+    let mut actuators: Vec<u16> = keys.iter().map(|k| k.1).collect();
+    actuators.sort_unstable();
+    actuators.dedup();
+    let per_pair = if options.frequency { 2 } else { 1 };
+    let total = keys.iter().filter(|k| wanted(k.0)).count() as u64;
+
+    let file = File::create(out)
+        .map_err(|source| InterchangeError::File { what: format!("creating {}", out.display()), source })?;
+    let mut sink = BufWriter::with_capacity(1 << 20, file);
+    let encoder = UffEncoder::new(options.format, options.precision);
+    let mut buffer = Vec::with_capacity(1 << 20);
+    encoder.encode(&UffRecord::Units(Units164::si()), &mut buffer)?;
+    let reference_label = |actuator: u16| grid_label_count(&grid) + 1 + u32::from(actuator);
+    let mut nodes = Vec::with_capacity(points.len() + actuators.len());
+    for &point in &points {
+        let (x_m, y_m) = grid.position_m(point as usize);
+        nodes.push(node(point + 1, x_m, y_m));
+    }
+    for &actuator in &actuators {
+        let Some(&(x_m, y_m)) = actuator_sites.get(usize::from(actuator)) else {
+            refuse!("actuator {actuator} has no position in the scene ({} actuators)", actuator_sites.len());
+        };
+        nodes.push(node(reference_label(actuator), x_m, y_m));
+    }
+    encoder.encode(&UffRecord::Nodes(Nodes2411 { nodes }), &mut buffer)?;
+    sink.write_all(&buffer)?;
+    let mut bytes = buffer.len() as u64;
+    buffer.clear();
+
+    progress(Progress { done: 0, total });
+    let shared = SharedIds::new(meta);
+    let mut done = 0u64;
+    let mut writer = RecordWriter {
+        encoder,
+        per_newton: ir_is_per_newton(meta),
+        pre_samples: meta.description.as_ref().map_or(0, |d| d.pre_samples),
+        frequency: options.frequency,
+        samples: Vec::new(),
+        spectrum: Vec::new(),
+    };
+    Dataset::stream(data, ReadOptions::default(), |batch: BatchRows<'_>| -> Result<(), InterchangeError> {
+        for (row, ir) in batch.iter() {
+            if !wanted(row.point_index) {
+                continue;
+            }
+            let labels = (row.point_index + 1, reference_label(row.actuator));
+            writer.encode(&shared.for_row(row), labels, row.sample_rate_hz, ir, &mut buffer)?;
+            sink.write_all(&buffer)?;
+            bytes += buffer.len() as u64;
+            buffer.clear();
+            done += 1;
+            progress(Progress { done, total });
+        }
+        Ok(())
+    })
+    .map_err(InterchangeError::at(|| format!("exporting {} to {}", data.display(), out.display())))?;
+    sink.flush()?;
+    sink.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+    Ok(ExportSummary { records: done * per_pair, bytes, elapsed_s: started.elapsed().as_secs_f64() })
+}
+
+/// Node labels of the grid points (`1..=nx * ny`), so that actuators number after them.
+fn grid_label_count(grid: &GridSpec) -> u32 {
+    u32::try_from(grid.len()).unwrap_or(u32::MAX - u32::from(u16::MAX) - 1)
+}
+
+/// A node of the default coordinate systems at (x, y, 0).
+fn node(label: u32, x_m: f64, y_m: f64) -> Node {
+    Node {
+        label,
+        export_coordinate_system: 1,
+        displacement_coordinate_system: 1,
+        color: 11,
+        position_m: [x_m, y_m, 0.0],
+    }
+}
+
+/// Whether the dataset's `ir` is velocity per newton (the ground truth, or an import of such), rather than per
+/// full-scale drive.
+fn ir_is_per_newton(meta: &DatasetMeta) -> bool {
+    match &meta.description {
+        Some(description) => description.ir_unit == IR_UNIT_M_S_PER_N,
+        // Written before datasets described themselves: only the simulation's ground truth was per newton.
+        None => meta.recipe == "simulate-greens",
+    }
+}
+
+/// Encodes responses of one dataset, reusing its buffers.
+struct RecordWriter {
+    encoder: UffEncoder,
+    /// The dataset's `ir` is per newton (else per full-scale drive).
+    per_newton: bool,
+    /// Samples before time 0 of every response.
+    pre_samples: u32,
+    /// Also the frequency response.
+    frequency: bool,
+    samples: Vec<f64>,
+    spectrum: Vec<Complex64>,
+}
+
+impl RecordWriter {
+    /// Encodes the impulse response `ir` (and its FRF with `frequency`) of the (response, reference) node labels
+    /// into `out`.
+    fn encode(
+        &mut self,
+        ids: &[String; 5],
+        (response, reference): (u32, u32),
+        sample_rate_hz: f64,
+        ir: &[f32],
+        out: &mut Vec<u8>,
+    ) -> Result<(), InterchangeError> {
+        self.samples.clear();
+        self.samples.extend(ir.iter().map(|&v| f64::from(v)));
+        let dt_s = 1.0 / sample_rate_hz;
+        let start_s = -f64::from(self.pre_samples) * dt_s;
+        let mut header =
+            FunctionHeader::velocity_over_force(FunctionType::TimeResponse, response, reference, start_s, dt_s, "");
+        header.id_lines = ids.clone();
+        if !self.per_newton {
+            header.denominator = AxisCharacteristics::new(0, "Drive", "full scale");
+        }
+        self.encoder.encode_function(&header, OrdinateRef::Real(&self.samples), out)?;
+        if self.frequency {
+            let n = self.samples.len();
+            self.spectrum.resize(fft::bin_count(n), Complex64::new(0.0, 0.0));
+            fft::forward_into(&self.samples, n, &mut self.spectrum)?;
+            // Referred to time 0: the first sample is at -pre_samples / fs.
+            for (k, bin) in self.spectrum.iter_mut().enumerate() {
+                let phase = 2.0 * std::f64::consts::PI * (k as f64) * f64::from(self.pre_samples) / n as f64;
+                *bin *= Complex64::from_polar(1.0, phase);
+            }
+            header.function_type = FunctionType::FrequencyResponse;
+            header.abscissa = AxisCharacteristics::new(18, "Frequency", "Hz");
+            header.abscissa_start = 0.0;
+            header.abscissa_step = sample_rate_hz / n as f64;
+            self.encoder.encode_function(&header, OrdinateRef::Complex(&self.spectrum), out)?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,6 @@
+//! The universal-file bridge as a library: datasets written through the store, exported, changed as other tools'
+//! files differ, and imported back.
+
+mod common;
+mod refusals;
+mod round_trip;
