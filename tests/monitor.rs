@@ -370,6 +370,29 @@ fn the_page_renders_the_grid_the_snr_map_and_the_spectra_in_chromium_while_a_sca
     let dom = String::from_utf8_lossy(&dom.stdout);
     assert!(dom.contains("6 / 6 points"), "the page shows the progress: {dom}");
     assert!(dom.contains("<svg") && dom.contains("act 7"), "maps and spectra: {dom}");
+    // The run has finished: the page says so, and when, instead of the time since the last commit and a stall
+    // warning.
+    let agebox = dom.split(r#"id="agebox""#).nth(1).and_then(|box_| box_.split("</div></div>").next()).unwrap();
+    assert!(agebox.contains(r#"id="agekey">finished<"#) && agebox.ends_with(" ago"), "{agebox}");
+    assert!(!agebox.contains("since the last commit") && !agebox.to_lowercase().contains("stall warning"), "{agebox}");
+}
+
+#[test]
+fn a_file_given_as_the_run_directory_is_refused_at_once_by_name() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("scan.log");
+    std::fs::write(&file, "not a run directory").unwrap();
+    let started = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["monitor", file.to_str().unwrap(), "--bind", "127.0.0.1:0"])
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(started.elapsed() < Duration::from_secs(10), "refused at once, not waited for: {:?}", started.elapsed());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains(&format!("{} is a file, not a run directory", file.display())), "{stderr}");
+    assert!(out.stdout.is_empty(), "nothing served");
 }
 
 #[test]

@@ -5,11 +5,7 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use clap::Args;
-use metaplate_monitor::follow::Follower;
-use metaplate_monitor::state::snapshot;
-use serde_json::json;
-
-use crate::notify::Notifier;
+use metaplate_recipes::notify::Notifier;
 
 /// Arguments of `metaplate monitor`.
 #[derive(Args, Debug)]
@@ -30,9 +26,9 @@ pub struct MonitorArgs {
 
 /// Serves until interrupted. Prints `monitor: http://ADDR/` on stdout once listening.
 pub fn run(args: &MonitorArgs) -> anyhow::Result<()> {
+    metaplate_monitor::check_run_dir(&args.run_dir)?;
     if let Some(command) = &args.notify_command {
-        let (dir, notifier) = (args.run_dir.clone(), Notifier::new(command.clone()));
-        std::thread::Builder::new().name("monitor-notify".into()).spawn(move || notify_on_changes(dir, notifier))?;
+        metaplate_monitor::notices::watch(args.run_dir.clone(), Notifier::new(command.clone()))?;
     }
     metaplate_monitor::serve(&args.run_dir, args.bind, |addr| {
         use std::io::Write as _;
@@ -41,32 +37,4 @@ pub fn run(args: &MonitorArgs) -> anyhow::Result<()> {
         let _ = std::io::stdout().flush();
     })?;
     Ok(())
-}
-
-/// Watches the run for `--notify-command`: a follower of its own (read-only, as the page's) polled every second;
-/// the command runs when the run's status changes to finished, stopped, failed or stalled while the monitor watches (a run
-/// that had already ended when the monitor started is not news), once per event (a new stall after progress is a
-/// new event).
-fn notify_on_changes(dir: PathBuf, notifier: std::sync::Arc<Notifier>) {
-    let mut follower = Follower::new(dir.clone());
-    let mut previous: Option<String> = None;
-    loop {
-        follower.poll();
-        let state = snapshot(follower.files(), &dir, chrono::Utc::now());
-        let status = state["status"].as_str().unwrap_or("waiting").to_owned();
-        if previous.as_deref().is_some_and(|p| p != status)
-            && ["finished", "stopped", "failed", "stalled"].contains(&status.as_str())
-        {
-            let key = format!("{status} at {}", state["points_done"]);
-            let summary = json!({
-                "recipe": state["recipe"], "dataset": dir.display().to_string(), "done": state["points_done"],
-                "total": state["points_total"], "committed_by_status": state["status_counts"],
-                "retries": state["retries"], "remaining_s": state["remaining_s"],
-                "last_commit_age_s": state["last_commit_age_s"], "source": "monitor",
-            });
-            notifier.notify(&key, &status, summary);
-        }
-        previous = Some(status);
-        std::thread::sleep(std::time::Duration::from_secs(1));
-    }
 }

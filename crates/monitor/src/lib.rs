@@ -13,7 +13,8 @@
 //! Endpoints:
 //! - `/`: one self-contained page (inline script and style; it fetches only this API) with the grid by status, the
 //!   SNR map on a fixed scale, the last committed point's spectra, progress, the remaining time, retries, free disk,
-//!   the time since the last commit with a stall warning, and the log's tail; it updates on each `commit` event.
+//!   the time since the last commit with a stall warning (once the run has ended: when it did), and the log's tail;
+//!   it updates on each `commit` event.
 //! - `/api/state`: a JSON snapshot: `status` (`waiting` for the dataset, `running`, `stalled`, `stopped`,
 //!   `finished`), `recipe`, `unit` (`point` or `actuator`), `points_total`, `points_done` (units), `status_counts`
 //!   (units by worst status: `measured`, `re-measured`, `overrange`, `dropout`, `failed`, `pending`), `started_at`,
@@ -31,13 +32,14 @@
 //!   `{seq, at, file, point (a calibration: actuator), rows, status, snr_db}`; `Last-Event-ID: N` replays the commits after N; a comment
 //!   every [`server::KEEP_ALIVE`] keeps an idle stream open.
 
-pub mod cells;
 pub mod follow;
+pub mod notices;
 mod server;
 pub mod state;
+pub mod view;
 
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, RwLock};
 
 pub use server::{KEEP_ALIVE, POLL_INTERVAL, is_loopback_host};
@@ -54,6 +56,12 @@ pub enum MonitorError {
         /// The address asked for.
         addr: SocketAddr,
     },
+    /// The path to follow is there and is not a directory.
+    #[error("{} is a file, not a run directory: give the directory a scan or a calibration writes (its --out)", path.display())]
+    NotADirectory {
+        /// The path given.
+        path: PathBuf,
+    },
     /// Starting the runtime, binding or serving failed.
     #[error("{op}: {source}")]
     Io {
@@ -64,11 +72,24 @@ pub enum MonitorError {
     },
 }
 
+/// Refuses a `run_dir` that is there and is not a directory (a file given by mistake would otherwise be waited for
+/// forever); a path that does not exist yet is a run still to start, and passes.
+///
+/// # Errors
+/// [`MonitorError::NotADirectory`], naming the path.
+pub fn check_run_dir(run_dir: &Path) -> Result<(), MonitorError> {
+    match std::fs::metadata(run_dir) {
+        Ok(meta) if !meta.is_dir() => Err(MonitorError::NotADirectory { path: run_dir.to_path_buf() }),
+        _ => Ok(()),
+    }
+}
+
 /// Serves the monitor of the run directory `run_dir` (which need not exist yet) on `bind`, a loopback address (port
 /// 0: any free port), until the process ends. `on_ready` is called once with the address bound, before the first
 /// request is served.
 ///
 /// # Errors
+/// [`MonitorError::NotADirectory`] for a path that is not a directory ([`check_run_dir`]);
 /// [`MonitorError::NotLoopback`] for another address; [`MonitorError::Io`] if the address cannot be bound or the
 /// runtime cannot start.
 pub fn serve(
@@ -76,6 +97,8 @@ pub fn serve(
     bind: SocketAddr,
     on_ready: impl FnOnce(SocketAddr),
 ) -> Result<(), MonitorError> {
+    let run_dir = run_dir.into();
+    check_run_dir(&run_dir)?;
     if !bind.ip().is_loopback() {
         return Err(MonitorError::NotLoopback { addr: bind });
     }
@@ -102,4 +125,29 @@ pub fn serve(
         on_ready(addr);
         axum::serve(listener, server::router(shared)).await.map_err(|source| MonitorError::Io { op: "serving", source })
     })
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_is_refused_by_name_at_once_and_a_directory_yet_to_come_is_not() {
+        let tmp = tempfile::tempdir().unwrap();
+        let file = tmp.path().join("scan.log");
+        std::fs::write(&file, "not a run").unwrap();
+        let loopback = SocketAddr::from(([127, 0, 0, 1], 0));
+        let error = serve(&file, loopback, |_| panic!("a file must not be served")).unwrap_err();
+        assert!(matches!(&error, MonitorError::NotADirectory { path } if *path == file), "{error}");
+        assert_eq!(
+            error.to_string(),
+            format!(
+                "{} is a file, not a run directory: give the directory a scan or a calibration writes (its --out)",
+                file.display()
+            )
+        );
+        assert!(check_run_dir(&tmp.path().join("not-yet")).is_ok());
+        assert!(check_run_dir(tmp.path()).is_ok());
+    }
 }

@@ -14,12 +14,12 @@ use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use futures_util::Stream;
-use serde_json::{Value, json};
+use serde::Serialize;
 use tokio::sync::watch;
 
-use crate::cells::SNR_SCALE_DB;
 use crate::follow::{Follower, RunFiles, point_records};
 use crate::state;
+use crate::view::{PointView, View};
 
 /// The page, with its script and style inline: nothing else is fetched but this server's API.
 const PAGE: &str = include_str!("page.html");
@@ -114,11 +114,16 @@ async fn not_found() -> Response {
     (StatusCode::NOT_FOUND, "not found\n").into_response()
 }
 
-fn json_response(value: &Value) -> Response {
+fn json_response(value: &impl Serialize) -> Response {
     let mut headers = HeaderMap::new();
     headers.insert(header::CONTENT_TYPE, HeaderValue::from_static("application/json"));
     headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
-    (headers, value.to_string()).into_response()
+    (headers, to_json(value)).into_response()
+}
+
+/// `value` as JSON text (our types always serialize; `null` if one ever did not).
+fn to_json(value: &impl Serialize) -> String {
+    serde_json::to_string(value).unwrap_or_else(|_| "null".into())
 }
 
 /// Where the page takes the view as it was when it was served, so that its first paint shows the run without waiting
@@ -137,7 +142,7 @@ async fn page(State(shared): State<Arc<Shared>>) -> Response {
         ),
     );
     // Inside a script element, `</` would end it: JSON allows `<\/` for it.
-    let view = view(&shared).to_string().replace("</", "<\\/");
+    let view = to_json(&view(&shared)).replace("</", "<\\/");
     (headers, PAGE.replacen(INITIAL_VIEW, &view, 1)).into_response()
 }
 
@@ -146,18 +151,9 @@ async fn api_state(State(shared): State<Arc<Shared>>) -> Response {
 }
 
 /// What the page draws: the snapshot, the maps, the last point's spectra and the log's tail.
-fn view(shared: &Shared) -> Value {
+fn view(shared: &Shared) -> View {
     let (files, dir) = (shared.files(), shared.dir());
-    let snapshot = state::snapshot(&files, &dir, chrono::Utc::now());
-    let maps = state::maps_svg(&files, MAP_WIDTH_PX, SNR_SCALE_DB);
-    json!({
-        "state": snapshot,
-        "status_svg": maps.as_ref().map(|m| &m.0),
-        "snr_svg": maps.as_ref().map(|m| &m.1),
-        "snr_scale_db": [SNR_SCALE_DB.0, SNR_SCALE_DB.1],
-        "spectrum": files.last_commit.as_ref().map(|(_, records)| state::spectra(records)),
-        "log_tail": files.log_tail,
-    })
+    View::new(&files, state::snapshot(&files, &dir, chrono::Utc::now()), MAP_WIDTH_PX)
 }
 
 async fn api_view(State(shared): State<Arc<Shared>>) -> Response {
@@ -172,27 +168,7 @@ async fn api_point(State(shared): State<Arc<Shared>>, UrlPath(n): UrlPath<String
     let (files, dir) = (shared.files(), shared.dir());
     let read = tokio::task::spawn_blocking(move || point_records(&dir, &files.journal, point)).await;
     match read {
-        Ok(Ok(Some(records))) => {
-            let rows: Vec<Value> = records
-                .iter()
-                .map(|r| {
-                    let m = &r.meta;
-                    json!({
-                        "actuator": m.actuator, "status": m.status.map(|s| s.as_str()), "snr_db": m.snr_db,
-                        "retries": m.retries, "measured_at_unix_us": m.measured_at_unix_us,
-                        "kind": m.kind.map(|k| k.as_str()), "sample_rate_hz": m.sample_rate_hz, "ir": r.ir,
-                    })
-                })
-                .collect();
-            let first = records.first().map(|r| r.meta);
-            json_response(&json!({
-                "point": point,
-                "ix": first.map(|m| m.ix), "iy": first.map(|m| m.iy),
-                "x_m": first.map(|m| m.x_m), "y_m": first.map(|m| m.y_m),
-                "status": crate::cells::worst_status(records.iter().map(|r| &r.meta)).map(|s| s.label()),
-                "rows": rows,
-            }))
-        }
+        Ok(Ok(Some(records))) => json_response(&PointView::new(point, records)),
         Ok(Ok(None)) => (StatusCode::NOT_FOUND, format!("point {point} is not committed\n")).into_response(),
         Ok(Err(e)) => (StatusCode::SERVICE_UNAVAILABLE, format!("{e}\n")).into_response(),
         Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, format!("{e}\n")).into_response(),
@@ -234,7 +210,7 @@ async fn events(
                 }
                 let since = after;
                 for commit in files.journal.commits.iter().filter(|c| since.is_none_or(|a| c.seq > a)) {
-                    let data = state::commit_event(&files, commit).to_string();
+                    let data = to_json(&state::commit_event(&files, commit));
                     queue.push_back(Event::default().id(commit.seq.to_string()).event("commit").data(data));
                     after = Some(commit.seq);
                 }

@@ -1,5 +1,8 @@
-//! What the page and `/api/state` show, computed from what [`crate::follow`] read: progress, status counts, the
-//! remaining-time estimates, the stall flag, disk space, the last point's spectrum and the log's tail.
+//! What `/api/state` and `/events` say, computed from what [`crate::follow`] read: progress, status counts, the
+//! remaining-time estimates, the stall flag, disk space ([`RunState`]); one commit ([`CommitEvent`]).
+//!
+//! Every type here derives `Serialize` with its fields in alphabetical order: the JSON the monitor served when
+//! these were `serde_json::Value` objects (whose keys sort), byte for byte.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -7,10 +10,11 @@ use std::path::Path;
 use chrono::{DateTime, SecondsFormat, Utc};
 use metaplate_figures::CellStatus;
 use metaplate_recipes::RemainingTime;
-use metaplate_store::{IrMeta, IrRecord, JournalCommit, Status};
-use serde_json::{Value, json};
+use metaplate_recipes::cells::{cell_status, planned_points, rank};
+use metaplate_store::{IrMeta, JournalCommit, Status};
+use serde::Serialize;
+use serde_json::{Map, Value};
 
-use crate::cells::{cell_status, grid_cells, planned_points, rank};
 use crate::follow::RunFiles;
 
 /// A run whose last commit is older than this many median point times (and [`STALL_MIN_S`]) is flagged as stalled.
@@ -19,21 +23,21 @@ pub const STALL_FACTOR: f64 = 4.0;
 pub const STALL_MIN_S: f64 = 30.0;
 /// What a run measures one unit at a time, as its recipe says: grid points (scan) or actuators (calibrate).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Units {
+pub(crate) enum Units {
     Points,
     Actuators,
 }
 
 impl Units {
     /// The units of a run with configuration `config`, and how many it plans.
-    fn of_config(config: &serde_json::Map<String, Value>) -> (Units, usize) {
+    pub(crate) fn of_config(config: &Map<String, Value>) -> (Units, usize) {
         match config.get("actuator_sites_m").and_then(Value::as_array) {
             Some(sites) => (Units::Actuators, sites.len()),
             None => (Units::Points, planned_points(config).len()),
         }
     }
 
-    fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Units::Points => "point",
             Units::Actuators => "actuator",
@@ -59,7 +63,10 @@ fn clock_time(unix_s: f64) -> Option<String> {
 }
 
 /// Per unit: its worst status over its rows, its lowest finite SNR.
-fn unit_cells<'a>(units: Units, rows: impl Iterator<Item = &'a IrMeta>) -> BTreeMap<u32, (CellStatus, Option<f64>)> {
+pub(crate) fn unit_cells<'a>(
+    units: Units,
+    rows: impl Iterator<Item = &'a IrMeta>,
+) -> BTreeMap<u32, (CellStatus, Option<f64>)> {
     let mut out: BTreeMap<u32, (CellStatus, Option<f64>)> = BTreeMap::new();
     for meta in rows {
         let status = cell_status(meta.status);
@@ -77,7 +84,7 @@ fn unit_cells<'a>(units: Units, rows: impl Iterator<Item = &'a IrMeta>) -> BTree
 
 /// How the run's own log says it last ended, if it did since it last started: `finished` or `stopped`, with the
 /// number of units the run had committed then (its `done=N`).
-fn logged_end(log: &str) -> Option<(&'static str, Option<usize>)> {
+fn logged_end(log: &str) -> Option<(RunStatus, Option<usize>)> {
     let line = log.lines().rev().find(|l| {
         l.contains("metaplate::run:")
             && (l.contains(" started") || l.contains(" finished") || l.contains("stopped") || l.contains("run failed"))
@@ -85,33 +92,202 @@ fn logged_end(log: &str) -> Option<(&'static str, Option<usize>)> {
     let done = line.split_whitespace().find_map(|w| w.strip_prefix("done=")).and_then(|n| n.parse().ok());
     // "run failed" first: its message (after it) may name any word.
     if line.contains("run failed") {
-        Some(("failed", None))
+        Some((RunStatus::Failed, None))
     } else if line.contains(" started") {
         None
     } else if line.contains(" finished") {
-        Some(("finished", done))
+        Some((RunStatus::Finished, done))
     } else {
-        Some(("stopped", done))
+        Some((RunStatus::Stopped, done))
+    }
+}
+
+/// A run as the monitor sees it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RunStatus {
+    /// No dataset in the directory yet.
+    Waiting,
+    /// Committing.
+    Running,
+    /// No commit for longer than [`RunState::stall_after_s`].
+    Stalled,
+    /// Stopped on request (its log says so), not finished.
+    Stopped,
+    /// Every planned unit committed.
+    Finished,
+    /// Ended in an error (its log says so).
+    Failed,
+}
+
+impl RunStatus {
+    /// The status's name, as the JSON and the page spell it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RunStatus::Waiting => "waiting",
+            RunStatus::Running => "running",
+            RunStatus::Stalled => "stalled",
+            RunStatus::Stopped => "stopped",
+            RunStatus::Finished => "finished",
+            RunStatus::Failed => "failed",
+        }
+    }
+
+    /// Whether the run has ended: finished, stopped or failed.
+    pub fn has_ended(self) -> bool {
+        matches!(self, RunStatus::Finished | RunStatus::Stopped | RunStatus::Failed)
+    }
+}
+
+/// A pair of estimates: the median and the 90th percentile (`null` while unknown).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Estimates<T> {
+    /// The median.
+    pub median: Option<T>,
+    /// The 90th percentile.
+    pub p90: Option<T>,
+}
+
+/// Free space and the space the rest of the run needs, bytes (`null` while unknown).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Disk {
+    /// Free bytes for an unprivileged writer on the run's file system.
+    pub free_bytes: Option<u64>,
+    /// The mean committed file size times the units left.
+    pub need_bytes: Option<u64>,
+}
+
+/// The `/api/state` snapshot (see the crate's documentation for each field). A field skipped when `None` is
+/// absent while the run is [`RunStatus::Waiting`] (there is no dataset to say it), and present (its value possibly
+/// `null`) once there is one.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunState {
+    /// The run's directory, as given.
+    pub dir: String,
+    /// Free and needed disk space.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub disk: Option<Disk>,
+    /// Wall-clock seconds since the dataset was created (to the last commit once finished).
+    pub elapsed_s: f64,
+    /// When the run will finish, clock times (RFC 3339 UTC); `null`s once finished.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub finish_at: Option<Estimates<String>>,
+    /// The journal's damaged or torn lines.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub journal_issues: Option<Vec<String>>,
+    /// Seconds since the last commit (or the dataset's creation).
+    pub last_commit_age_s: Option<f64>,
+    /// The last commit's sequence number.
+    pub last_seq: Option<u64>,
+    /// The median time per unit, s (`Some(None)`: not known yet).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub median_point_s: Option<Option<f64>>,
+    /// Units committed.
+    pub points_done: usize,
+    /// Units planned.
+    pub points_total: Option<usize>,
+    /// A read that failed and will be retried.
+    pub problem: Option<String>,
+    /// Rows re-measured.
+    pub re_measured: usize,
+    /// `scan` or `calibrate`.
+    pub recipe: Option<String>,
+    /// The remaining time, s.
+    pub remaining_s: Estimates<f64>,
+    /// The committed rows' retries.
+    pub retries: u64,
+    /// A run without a commit for longer than this is stalled, s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stall_after_s: Option<f64>,
+    /// Whether the run is stalled.
+    pub stalled: bool,
+    /// When the dataset was created (RFC 3339).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub started_at: Option<String>,
+    /// The run's status.
+    pub status: RunStatus,
+    /// Units by their worst status (`pending`: planned, not committed).
+    pub status_counts: BTreeMap<&'static str, usize>,
+    /// `point` or `actuator`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unit: Option<&'static str>,
+}
+
+/// What `--notify-command` is given when a run the monitor watches ends or stalls (the notifier adds `event` and
+/// `host`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Notice {
+    /// Units by their worst status.
+    pub committed_by_status: BTreeMap<&'static str, usize>,
+    /// The run's directory.
+    pub dataset: String,
+    /// Units committed.
+    pub done: usize,
+    /// Seconds since the last commit.
+    pub last_commit_age_s: Option<f64>,
+    /// `scan` or `calibrate`.
+    pub recipe: Option<String>,
+    /// The remaining time, s.
+    pub remaining_s: Estimates<f64>,
+    /// The committed rows' retries.
+    pub retries: u64,
+    /// `monitor`.
+    pub source: &'static str,
+    /// Units planned.
+    pub total: Option<usize>,
+}
+
+impl RunState {
+    /// The notification of this state.
+    pub fn notice(&self) -> Notice {
+        Notice {
+            committed_by_status: self.status_counts.clone(),
+            dataset: self.dir.clone(),
+            done: self.points_done,
+            last_commit_age_s: self.last_commit_age_s,
+            recipe: self.recipe.clone(),
+            remaining_s: self.remaining_s.clone(),
+            retries: self.retries,
+            source: "monitor",
+            total: self.points_total,
+        }
     }
 }
 
 /// The `/api/state` snapshot of the run in `dir` at `now` (fields documented in the crate's documentation).
-pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
+pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> RunState {
     let now_s = now.timestamp_millis() as f64 / 1e3;
     let Some(manifest) = &files.manifest else {
-        return json!({
-            "dir": dir.display().to_string(), "status": "waiting", "recipe": null,
-            "points_total": null, "points_done": 0, "status_counts": {}, "elapsed_s": 0.0,
-            "remaining_s": {"median": null, "p90": null}, "last_commit_age_s": null, "stalled": false,
-            "retries": 0, "re_measured": 0, "last_seq": null, "problem": files.problem,
-        });
+        return RunState {
+            dir: dir.display().to_string(),
+            disk: None,
+            elapsed_s: 0.0,
+            finish_at: None,
+            journal_issues: None,
+            last_commit_age_s: None,
+            last_seq: None,
+            median_point_s: None,
+            points_done: 0,
+            points_total: None,
+            problem: files.problem.clone(),
+            re_measured: 0,
+            recipe: None,
+            remaining_s: Estimates { median: None, p90: None },
+            retries: 0,
+            stall_after_s: None,
+            stalled: false,
+            started_at: None,
+            status: RunStatus::Waiting,
+            status_counts: BTreeMap::new(),
+            unit: None,
+        };
     };
     let meta = &manifest.meta;
     let (units, total) = Units::of_config(&meta.config);
     let cells = unit_cells(units, files.all_rows());
     let done = cells.len();
     let total = total.max(done);
-    let mut status_counts: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut status_counts: BTreeMap<&'static str, usize> = BTreeMap::new();
     for (status, _) in cells.values() {
         *status_counts.entry(status.label()).or_default() += 1;
     }
@@ -135,8 +311,8 @@ pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
     let log = &files.log_tail;
     // The log is read now and the journal at the last poll: an end the journal does not show yet is not taken.
     let logged = logged_end(log).filter(|(_, logged_done)| logged_done.is_none_or(|n| n <= done)).map(|(end, _)| end);
-    let status = if done >= total && total > 0 { Some("finished") } else { logged };
-    let end_s = if status == Some("finished") { last_s } else { Some(now_s) };
+    let status = if done >= total && total > 0 { Some(RunStatus::Finished) } else { logged };
+    let end_s = if status == Some(RunStatus::Finished) { last_s } else { Some(now_s) };
     let elapsed_s = match (created_s, end_s) {
         (Some(a), Some(b)) => (b - a).max(0.0),
         _ => 0.0,
@@ -144,46 +320,70 @@ pub fn snapshot(files: &RunFiles, dir: &Path, now: DateTime<Utc>) -> Value {
     let last_commit_age_s = last_s.map(|t| (now_s - t).max(0.0));
     let stall_after_s = median_point_s.map_or(STALL_MIN_S, |m| (STALL_FACTOR * m).max(STALL_MIN_S));
     let stalled = status.is_none() && last_commit_age_s.is_some_and(|age| age > stall_after_s);
-    let status = status.unwrap_or(if stalled { "stalled" } else { "running" });
+    let status = status.unwrap_or(if stalled { RunStatus::Stalled } else { RunStatus::Running });
     let bytes_per_unit = {
         let sizes: Vec<u64> = files.journal.commits.iter().map(|c| c.batch.size_bytes).collect();
         (!sizes.is_empty()).then(|| sizes.iter().sum::<u64>() as f64 / sizes.len() as f64)
     };
-    let finish = |r: f64| if status == "finished" { None } else { clock_time(now_s + r) };
-    json!({
-        "dir": dir.display().to_string(),
-        "recipe": meta.recipe,
-        "unit": units.name(),
-        "status": status,
-        "points_total": total,
-        "points_done": done,
-        "status_counts": status_counts,
-        "started_at": manifest.created_at,
-        "elapsed_s": elapsed_s,
-        "median_point_s": median_point_s,
-        "remaining_s": {"median": remaining.map(|r| r.0), "p90": remaining.map(|r| r.1)},
-        "finish_at": {
-            "median": remaining.and_then(|r| finish(r.0)),
-            "p90": remaining.and_then(|r| finish(r.1)),
-        },
-        "last_commit_age_s": last_commit_age_s,
-        "stall_after_s": stall_after_s,
-        "stalled": stalled,
-        "retries": retries,
-        "re_measured": re_measured,
-        "disk": {
-            "free_bytes": files.free_bytes,
-            "need_bytes": bytes_per_unit.map(|b| (b * (total - done) as f64).ceil() as u64),
-        },
-        "last_seq": files.journal.commits.last().map(|c| c.seq),
-        "journal_issues": files.journal.issues.iter().map(|i| format!("line {}: {}", i.line, i.reason)).collect::<Vec<_>>(),
-        "problem": files.problem,
-    })
+    let finish = |r: f64| if status == RunStatus::Finished { None } else { clock_time(now_s + r) };
+    RunState {
+        dir: dir.display().to_string(),
+        disk: Some(Disk {
+            free_bytes: files.free_bytes,
+            need_bytes: bytes_per_unit.map(|b| (b * (total - done) as f64).ceil() as u64),
+        }),
+        elapsed_s,
+        finish_at: Some(Estimates {
+            median: remaining.and_then(|r| finish(r.0)),
+            p90: remaining.and_then(|r| finish(r.1)),
+        }),
+        journal_issues: Some(files.journal.issues.iter().map(|i| format!("line {}: {}", i.line, i.reason)).collect()),
+        last_commit_age_s,
+        last_seq: files.journal.commits.last().map(|c| c.seq),
+        median_point_s: Some(median_point_s),
+        points_done: done,
+        points_total: Some(total),
+        problem: files.problem.clone(),
+        re_measured,
+        recipe: Some(meta.recipe.clone()),
+        remaining_s: Estimates { median: remaining.map(|r| r.0), p90: remaining.map(|r| r.1) },
+        retries,
+        stall_after_s: Some(stall_after_s),
+        stalled,
+        started_at: Some(manifest.created_at.clone()),
+        status,
+        status_counts,
+        unit: Some(units.name()),
+    }
+}
+
+/// The event `/events` sends for a commit. Its unit is named by its kind: `point` (the grid index) for a scan,
+/// `actuator` for a calibration; the other is absent.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CommitEvent {
+    /// A calibration's actuator (`Some(None)`: the commit names none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub actuator: Option<Option<u32>>,
+    /// When it was journaled (RFC 3339).
+    pub at: String,
+    /// The committed file.
+    pub file: String,
+    /// A scan's grid point (`Some(None)`: the commit names none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point: Option<Option<u32>>,
+    /// Rows committed.
+    pub rows: u64,
+    /// The journal line's sequence number.
+    pub seq: u64,
+    /// The unit's lowest SNR, dB (while its file holds the dataset).
+    pub snr_db: Option<f64>,
+    /// The unit's worst status (while its file holds the dataset).
+    pub status: Option<&'static str>,
 }
 
 /// The event `/events` sends for `commit`: its sequence number, time, unit (`point`: the grid index, or
 /// `actuator`) and (while its file holds the dataset) the unit's status and lowest SNR.
-pub fn commit_event(files: &RunFiles, commit: &JournalCommit) -> Value {
+pub fn commit_event(files: &RunFiles, commit: &JournalCommit) -> CommitEvent {
     let units = files.manifest.as_ref().map_or(Units::Points, |m| Units::of_config(&m.meta.config).0);
     let unit = commit.batch.keys.first().map(|&(point, actuator)| match units {
         Units::Points => point,
@@ -191,65 +391,16 @@ pub fn commit_event(files: &RunFiles, commit: &JournalCommit) -> Value {
     });
     let rows = files.rows.get(&commit.batch.file);
     let cell = rows.and_then(|rows| unit_cells(units, rows.iter()).into_values().next());
-    json!({
-        "seq": commit.seq,
-        "at": commit.at,
-        "file": commit.batch.file,
-        units.name(): unit,
-        "rows": commit.batch.rows,
-        "status": cell.map(|c| c.0.label()),
-        "snr_db": cell.and_then(|c| c.1),
-    })
-}
-
-/// The status and SNR maps of a scan as inline SVG (`None` for a calibration, which has no grid to show).
-pub fn maps_svg(files: &RunFiles, width_px: usize, snr_scale_db: (f64, f64)) -> Option<(String, String)> {
-    let meta = &files.manifest.as_ref()?.meta;
-    if meta.config.contains_key("actuator_sites_m") {
-        return None;
+    CommitEvent {
+        actuator: (units == Units::Actuators).then_some(unit),
+        at: commit.at.clone(),
+        file: commit.batch.file.clone(),
+        point: (units == Units::Points).then_some(unit),
+        rows: commit.batch.rows,
+        seq: commit.seq,
+        snr_db: cell.and_then(|c| c.1),
+        status: cell.map(|c| c.0.label()),
     }
-    let (states, snr) = grid_cells(&meta.grid, &planned_points(&meta.config), files.all_rows());
-    let (nx, ny) = (meta.grid.nx, meta.grid.ny);
-    Some((
-        metaplate_figures::status_map_svg(nx, ny, &states, width_px),
-        metaplate_figures::snr_map_svg(nx, ny, &snr, snr_scale_db, width_px),
-    ))
-}
-
-/// Log-spaced frequencies of the spectrum plot, Hz.
-const SPECTRUM_BAND_HZ: (f64, f64) = (20.0, 2000.0);
-/// Points per actuator of the spectrum plot.
-const SPECTRUM_POINTS: usize = 240;
-
-/// The magnitude spectra, dB (re 1), of `records` (one per actuator; a calibration's rows carry their `kind`) on log-spaced frequencies: the largest bin in
-/// each frequency's interval, so that narrow resonances are not lost. `{"freq_hz": [...], "actuators": [{"actuator",
-/// "db": [...]}]}`; a response that cannot be transformed (non-finite samples) is left out.
-pub fn spectra(records: &[IrRecord]) -> Value {
-    let Some(first) = records.first() else { return Value::Null };
-    let fs = first.meta.sample_rate_hz;
-    let hi = SPECTRUM_BAND_HZ.1.min(fs / 2.0);
-    let ratio = (hi / SPECTRUM_BAND_HZ.0).max(1.0);
-    let freq_hz: Vec<f64> =
-        (0..=SPECTRUM_POINTS).map(|i| SPECTRUM_BAND_HZ.0 * ratio.powf(i as f64 / SPECTRUM_POINTS as f64)).collect();
-    let mut actuators = Vec::new();
-    for record in records {
-        let x: Vec<f64> = record.ir.iter().map(|v| f64::from(*v)).collect();
-        let n = x.len().max(2);
-        let Ok(spectrum) = metaplate_dsp::fft::forward(&x, n) else { continue };
-        let bin = |f: f64| ((f * n as f64 / fs).round() as usize).min(spectrum.len() - 1);
-        let db: Vec<Option<f64>> = freq_hz
-            .windows(2)
-            .map(|w| {
-                let (a, b) = (bin(w[0]), bin(w[1]).max(bin(w[0])));
-                let peak = spectrum[a..=b].iter().map(|c| c.norm()).fold(0.0, f64::max);
-                (peak > 0.0).then(|| 20.0 * peak.log10())
-            })
-            .collect();
-        let kind = record.meta.kind.map(|k| k.as_str());
-        actuators.push(json!({"actuator": record.meta.actuator, "kind": kind, "db": db}));
-    }
-    let centres: Vec<f64> = freq_hz.windows(2).map(|w| (w[0] * w[1]).sqrt()).collect();
-    json!({"point": first.meta.point_index, "freq_hz": centres, "actuators": actuators})
 }
 
 #[cfg(test)]
@@ -262,12 +413,12 @@ mod tests {
         let started = "2026-01-01T00:00:00Z  INFO metaplate::run: scan started total=6 done=0\n";
         assert_eq!(logged_end(started), None);
         let finished = format!("{started}x  INFO metaplate::run: finished done=6\n");
-        assert_eq!(logged_end(&finished), Some(("finished", Some(6))));
+        assert_eq!(logged_end(&finished), Some((RunStatus::Finished, Some(6))));
         let stopped = format!("{started}x  INFO metaplate::run: stopped on request done=2\n");
-        assert_eq!(logged_end(&stopped), Some(("stopped", Some(2))));
+        assert_eq!(logged_end(&stopped), Some((RunStatus::Stopped, Some(2))));
         let failed =
             format!("{started}x ERROR metaplate::run: run failed error=the DAQ stopped answering; finished 2\n");
-        assert_eq!(logged_end(&failed), Some(("failed", None)));
+        assert_eq!(logged_end(&failed), Some((RunStatus::Failed, None)));
         let resumed = format!("{started}x  INFO metaplate::run: stopped on request done=2\n{started}");
         assert_eq!(logged_end(&resumed), None);
     }

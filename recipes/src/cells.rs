@@ -1,16 +1,17 @@
-//! The per-point reduction of a scan's rows that the status and SNR maps draw: one home for the report's page and
-//! the monitor's.
+//! Which points a scan plans, read from its configuration, and the per-point reduction of its rows that the status
+//! and SNR maps draw (the report's page and the monitor's): one home for both readers.
 
+use metaplate_core::grid::GridSpec;
 use metaplate_figures::CellStatus;
-use metaplate_store::{GridSpec, IrMeta, Status};
+use metaplate_store::{IrMeta, Status};
 use serde_json::{Map, Value};
 
 /// Fixed SNR colour scale of the maps, dB: 0 is no signal; the scan's default gate (20 dB) sits a fifth of the way
 /// up, and the mock lab's taped plates (60 to 80 dB) stay below the top.
 pub const SNR_SCALE_DB: (f64, f64) = (0.0, 100.0);
 
-/// The grid points a scan plans to measure: its configuration's `points` (grid indices), or none when the
-/// configuration has no such list (a calibration).
+/// The grid points a scan plans to measure: its configuration's `points` (grid indices, as a scan writes them in
+/// its manifest), or none when the configuration has no such list (a calibration).
 pub fn planned_points(config: &Map<String, Value>) -> Vec<u32> {
     config
         .get("points")
@@ -36,8 +37,8 @@ pub fn worst_status<'a>(rows: impl IntoIterator<Item = &'a IrMeta>) -> Option<Ce
     rows.into_iter().map(|m| cell_status(m.status)).max_by_key(|s| rank(*s))
 }
 
-/// Position in the legend's order: the larger, the worse.
-pub(crate) fn rank(status: CellStatus) -> usize {
+/// Position of `status` in the legend's order: the larger, the worse.
+pub fn rank(status: CellStatus) -> usize {
     CellStatus::ALL.iter().position(|x| *x == status).unwrap_or(0)
 }
 
@@ -105,5 +106,17 @@ mod tests {
             ]
         );
         assert_eq!(snr, [Some(30.0), None, None, None, None, None]);
+        assert_eq!(worst_status(&rows), Some(CellStatus::Dropout));
+        assert_eq!(worst_status(&[]), None);
+    }
+
+    #[test]
+    fn the_planned_points_are_the_configurations_points_and_a_calibration_plans_none() {
+        let scan = serde_json::json!({"points": [4, 0, 7], "gates": {}});
+        assert_eq!(planned_points(scan.as_object().unwrap()), [4, 0, 7]);
+        let calibration = serde_json::json!({"actuator_sites_m": [[0.0, 0.0]]});
+        assert_eq!(planned_points(calibration.as_object().unwrap()), Vec::<u32>::new());
+        let odd = serde_json::json!({"points": [1, -1, "2", 5_000_000_000u64, 3]});
+        assert_eq!(planned_points(odd.as_object().unwrap()), [1, 3], "only grid indices count");
     }
 }
