@@ -22,6 +22,12 @@ use crate::drive::{DRIVE_PEAK_FS, to_audio_rate};
 use crate::engine::session::BLOCK_LEN_SAMPLES;
 use crate::error::RecipeError;
 
+mod prepare;
+pub use prepare::{
+    PixelPrediction, PixelReport, PlayReport, PreparedPattern, SCAN_IR_UNIT, calibration_filters, check_same_plate,
+    prepare, render_through,
+};
+
 /// Silence before the onset on every channel, s: the marker's fade-in starts from silence, and the onset search
 /// never looks before the recording's start.
 pub const LEAD_S: f64 = 0.05;

@@ -126,6 +126,22 @@ pub enum ControlError {
         /// The limit in force, dB.
         max_error_db: f64,
     },
+    /// A pixel given as text (`X_M,Y_M[:TARGET]`) does not parse.
+    #[error("--pixel `{text}`: {reason}")]
+    Pixel {
+        /// The text given.
+        text: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A step of a longer computation failed: which step, and why.
+    #[error("{context}: {cause}")]
+    During {
+        /// The step (`building G(omega)`, `solving the drives`).
+        context: &'static str,
+        /// Its error.
+        cause: Box<ControlError>,
+    },
     /// Reading the dataset failed.
     #[error(transparent)]
     Store(#[from] StoreError),

@@ -6,9 +6,12 @@
 //! [`focal`]: single-pixel focal fields at focus time for many targets at once (one GEMM).
 //! [`pixels`]: where a pixel can be focused (on the plate, near a measured point) and the point it snaps to.
 //! [`render`]: drive signals (Kirkeby compensation, peak normalisation) and the predicted field `v(x, t)`.
+//! [`focus`]: pixels in metres with their targets rendered into calibrated, peak-normalised drives (what `focus`,
+//! `play` and the experiments play), and the predicted field at the pixels.
 
 pub mod error;
 pub mod focal;
+pub mod focus;
 pub mod pixels;
 pub mod propagation;
 pub mod render;
