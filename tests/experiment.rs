@@ -166,17 +166,7 @@ fn polars_reads_the_trials_parquet() {
          assert pq.read_metadata(sys.argv[1]).metadata[b'metaplate.experiment'] == b'motion-direction'\n\
          print('ok')\n"
     );
-    let out = Command::new(python()).arg("-c").arg(script).arg(&parquet).output().unwrap();
+    let out = Command::new(metaplate_fixtures::python()).arg("-c").arg(script).arg(&parquet).output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success() && stdout.contains("ok"), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
-}
-
-/// The interpreter with the cross-check packages: `$METAPLATE_PYTHON`, else the workspace's `.venv`.
-fn python() -> std::path::PathBuf {
-    if let Some(p) = std::env::var_os("METAPLATE_PYTHON") {
-        return p.into();
-    }
-    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
-    assert!(venv.exists(), "no {} and no METAPLATE_PYTHON: run scripts/install-deps.sh", venv.display());
-    venv
 }

@@ -164,9 +164,17 @@ fn a_simulated_session_runs_end_to_end_and_the_report_reads_it() {
     assert!(p["correct"].as_u64().unwrap() >= 10, "{report}");
 }
 
+/// A number in `0..n` from the clock's nanoseconds (the kill instants; printed, so a failure can be replayed).
+fn random_below(n: u64) -> u64 {
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().subsec_nanos();
+    u64::from(nanos.wrapping_mul(2_654_435_761)) % n.max(1)
+}
+
 /// Runs `experiment` (a file or a built-in's name) twice with `sim:seed=3` on `scan`: once whole, once killed
-/// with SIGKILL after its fourth journal entry and resumed. Both must have the same plan and the same results
-/// (clock times apart). Returns the whole session's directory and what it printed on standard error.
+/// with SIGKILL at a random instant (after a random number of journal entries, at least one and at most half the
+/// trials, plus a random 0 to 20 ms) and resumed. The signal goes to the binary's own process (spawned directly,
+/// no shell around it: its `/proc/PID/exe` is checked). Both must have the same plan and the same results (clock
+/// times apart). Returns the whole session's directory and what it printed on standard error.
 fn whole_and_killed_sessions_agree(experiment: &Path, scan: &Path, name: &str, trials: usize) -> (PathBuf, String) {
     let with_scan = |out: &Path| {
         let mut args = run_args(experiment, "sim:seed=3", out);
@@ -182,19 +190,26 @@ fn whole_and_killed_sessions_agree(experiment: &Path, scan: &Path, name: &str, t
     let split = fresh(&format!("{name}-killed"));
     let args = with_scan(&split);
     let mut child = command(&args).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    if let Ok(exe) = std::fs::read_link(format!("/proc/{}/exe", child.id())) {
+        assert_eq!(exe, Path::new(env!("CARGO_BIN_EXE_metaplate")), "the child is the binary itself");
+    }
     let journal = split.join(JOURNAL_FILE);
     let started = Instant::now();
     let lines = || std::fs::read_to_string(&journal).map_or(0, |t| t.lines().count());
-    while lines() < 4 {
-        assert!(started.elapsed() < Duration::from_secs(120), "no 4 journal lines in 2 minutes");
+    let (after, delay_ms) = (1 + random_below(trials as u64 / 2) as usize, random_below(21));
+    eprintln!("{name}: killed after {after} journal lines and {delay_ms} ms");
+    while lines() < after {
+        assert!(started.elapsed() < Duration::from_secs(120), "no {after} journal lines in 2 minutes");
         assert!(child.try_wait().unwrap().is_none(), "the session ended before it was killed");
         std::thread::sleep(Duration::from_millis(1));
     }
-    child.kill().unwrap(); // SIGKILL
+    std::thread::sleep(Duration::from_millis(delay_ms));
+    assert!(child.try_wait().unwrap().is_none(), "the session ended before it was killed");
+    child.kill().unwrap(); // SIGKILL, to the binary's process
     child.wait().unwrap();
     let killed = SessionRecord::read(&split).unwrap();
     let answered = killed.progress.results.iter().flatten().count();
-    assert!((4..trials).contains(&answered), "killed after {answered} of {trials} trials");
+    assert!((1..trials).contains(&answered), "killed after {answered} of {trials} trials");
 
     let out = command(&args).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -449,4 +464,137 @@ fn the_stimuli_judged_on_the_ground_truth_match_the_scans_prediction_at_the_targ
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("the scan was made on the scene `metamaterial`"), "{stderr}");
+}
+
+/// The console's session of `args` fed `answers` (one line each) and then the end of its input.
+fn console_session(args: &[String], answers: &str) -> Output {
+    run_with_stdin(args, answers)
+}
+
+/// `experiment report --json` of `dir`, with the `dir` key taken out (it names the directory).
+fn report_without_dir(dir: &Path) -> Value {
+    let out = command(&["experiment".into(), "report".into(), dir.to_str().unwrap().into(), "--json".into()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    report["participants"][0].as_object_mut().unwrap().remove("dir");
+    report
+}
+
+#[test]
+fn a_second_run_on_a_session_in_use_is_refused_at_once_and_the_first_completes() {
+    let (.., file, _) = fixtures();
+    // 15 trials answered at the console: the left key for every trial.
+    let answers = "1\n".repeat(15);
+    let whole = fresh("one-writer-uninterrupted");
+    let out = console_session(&run_args(file, "P11", &whole), &answers);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    // The first process answers one trial and waits at the console for the second.
+    let dir = fresh("one-writer");
+    let args = run_args(file, "P11", &dir);
+    let mut first = command(&args).stdin(Stdio::piped()).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let mut stdin = first.stdin.take().unwrap();
+    stdin.write_all(b"1\n").unwrap();
+    let journal = dir.join(JOURNAL_FILE);
+    let started = Instant::now();
+    while std::fs::read_to_string(&journal).map_or(0, |t| t.lines().count()) < 1 {
+        assert!(started.elapsed() < Duration::from_secs(120), "the first process journalled nothing in 2 minutes");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let before: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|p| (p.clone(), std::fs::read(&p).unwrap()))
+        .collect();
+    for participant in ["P11", "sim:seed=3"] {
+        let asked = Instant::now();
+        let second = run_with_stdin(&run_args(file, participant, &dir), "1\n");
+        let stderr = String::from_utf8_lossy(&second.stderr);
+        assert!(!second.status.success(), "{stderr}");
+        assert!(stderr.contains("is in use by another process"), "{stderr}");
+        assert!(stderr.contains(dir.to_str().unwrap()) && stderr.contains(&format!("pid {}", first.id())), "{stderr}");
+        assert!(!stderr.contains("trial "), "refused before any trial: {stderr}");
+        assert!(asked.elapsed() < Duration::from_secs(30), "refused at once, not after {:?}", asked.elapsed());
+    }
+    let after: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .map(|p| (p.clone(), std::fs::read(&p).unwrap()))
+        .collect();
+    assert_eq!(before, after, "the refused processes changed nothing");
+    stdin.write_all("1\n".repeat(14).as_bytes()).unwrap();
+    drop(stdin);
+    let out = first.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let record = SessionRecord::read(&dir).unwrap();
+    assert!(record.duplicates.is_empty());
+    assert_eq!(record.entries.len(), 15);
+    assert_eq!(report_without_dir(&dir), report_without_dir(&whole));
+}
+
+/// Appends to `dir`'s journal a copy of its `line`-th entry (0-based), with the response `response` if given.
+fn duplicate_entry(dir: &Path, line: usize, response: Option<&str>) {
+    let path = dir.join(JOURNAL_FILE);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut entry: Value = serde_json::from_str(text.lines().nth(line).unwrap()).unwrap();
+    if let Some(r) = response {
+        entry["response"] = r.into();
+    }
+    let mut f = std::fs::OpenOptions::new().append(true).open(&path).unwrap();
+    writeln!(f, "{entry}").unwrap();
+}
+
+#[test]
+fn a_session_with_duplicated_entries_is_reported_and_resumed_or_refused_until_settled() {
+    let (.., file, _) = fixtures();
+    let dir = fresh("duplicated");
+    let args = run_args(file, "P12", &dir);
+    // Three trials answered, then the input ends; two processes then journalled trials 1 and 2 twice (agreeing).
+    let out = console_session(&args, "1\n2\n3\n");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    duplicate_entry(&dir, 0, None);
+    duplicate_entry(&dir, 1, None);
+    let record = SessionRecord::read(&dir).unwrap();
+    let first_trial = match &record.entries[0] {
+        Entry::Trial(r) => r.trial,
+        other => panic!("{other:?}"),
+    };
+    let report = report_without_dir(&dir);
+    let dups = report["participants"][0]["duplicated_trials"].as_array().unwrap().clone();
+    assert_eq!(dups.len(), 2, "{report}");
+    assert_eq!(dups[0]["trial"], first_trial);
+    assert_eq!(dups[0]["responses"], serde_json::json!(["left", "left"]));
+    assert_eq!(dups[0]["counted"], "left");
+    let text = command(&["experiment".into(), "report".into(), dir.to_str().unwrap().into()]).output().unwrap();
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("trials journalled more than once") && text.contains("(agree)"), "{text}");
+    // Agreeing duplicates: the session continues.
+    let out = console_session(&args, "1\n");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(SessionRecord::read(&dir).unwrap().progress.results.iter().flatten().count(), 4);
+
+    // A conflicting duplicate (trial 1 answered `right` by the other process): refused, naming it and the fix.
+    duplicate_entry(&dir, 0, Some("right"));
+    let journal_before = std::fs::read(dir.join(JOURNAL_FILE)).unwrap();
+    let out = console_session(&args, "1\n");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(stderr.contains(&format!("trial {first_trial} (left, left, right)")), "{stderr}");
+    assert!(stderr.contains("metaplate experiment correct"), "{stderr}");
+    assert_eq!(std::fs::read(dir.join(JOURNAL_FILE)).unwrap(), journal_before, "nothing written");
+    let report = report_without_dir(&dir);
+    assert_eq!(report["participants"][0]["duplicated_trials"][0]["counted"], "left", "the first answer counts");
+    // Settled by a correction, the session continues, and the corrected answer counts.
+    let correct =
+        ["experiment", "correct", dir.to_str().unwrap(), "--trial", &first_trial.to_string(), "--response", "right"]
+            .map(String::from);
+    let out = command(&correct).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = console_session(&args, "1\n");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let record = SessionRecord::read(&dir).unwrap();
+    assert_eq!(record.progress.results[first_trial as usize].as_ref().unwrap().response, "right");
+    assert_eq!(record.progress.results.iter().flatten().count(), 5);
 }

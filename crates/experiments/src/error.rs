@@ -89,6 +89,59 @@ pub enum ExperimentError {
         /// Why.
         reason: String,
     },
+    /// Rendering or playing a stimulus failed or was refused (a pixel off the plate or in a gap, a drive that would
+    /// clip, a scan not measured through the calibration, a device error).
+    #[error("{0}")]
+    Playback(String),
+    /// A session cannot run as asked (another participant's session, a response key the console keeps, a stored
+    /// plan naming a stimulus the file lacks): the message says why and what to do.
+    #[error("{0}")]
+    Refused(String),
+    /// Another process is running the session in this directory: only one writer at a time.
+    #[error(
+        "the session in {dir} is in use by another process ({holder}): only one `experiment run` may write a \
+         session at a time; wait for it to finish, or stop it, then run the same command again"
+    )]
+    Locked {
+        /// The session directory.
+        dir: PathBuf,
+        /// The holder as its lock records it: `pid N on HOST`, or `pid unknown`.
+        holder: String,
+    },
+    /// The journal answers some trials more than once with different responses (written by two processes at once,
+    /// before sessions were locked): the session cannot continue until each is settled.
+    #[error(
+        "the session in {dir} has trials journalled more than once with different answers: {trials}; settle each \
+         with `metaplate experiment correct {dir} --trial N --response LABEL` (the answer that counts), then run \
+         the same command again"
+    )]
+    ConflictingDuplicates {
+        /// The session directory.
+        dir: PathBuf,
+        /// Each conflicting trial with its answers, `trial 33 (left, right)`, comma-separated.
+        trials: String,
+    },
+    /// Writing a report or an event failed (standard output, a Parquet file, a figure).
+    #[error("{0}")]
+    Output(String),
+}
+
+impl From<metaplate_recipes::RecipeError> for ExperimentError {
+    fn from(e: metaplate_recipes::RecipeError) -> Self {
+        Self::Playback(e.to_string())
+    }
+}
+
+impl From<metaplate_control::ControlError> for ExperimentError {
+    fn from(e: metaplate_control::ControlError) -> Self {
+        Self::Playback(e.to_string())
+    }
+}
+
+impl From<std::io::Error> for ExperimentError {
+    fn from(e: std::io::Error) -> Self {
+        Self::Output(e.to_string())
+    }
 }
 
 impl ExperimentError {

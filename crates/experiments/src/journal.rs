@@ -6,24 +6,27 @@
 //! - `journal.jsonl`: one JSON object per line ([`Entry`]), each written and fsync'd as it happens. Nothing is ever
 //!   overwritten: a correction, an undo or a void is a new line. Reading tolerates a torn last line (a kill while
 //!   writing it): that line is ignored, and cut off before the next append.
+//! - `writer.json`: the pid and host of the process holding the session's lock ([`crate::lock`]); a journal that
+//!   answers a trial twice (two writers, before the lock) is read as [`crate::duplicates`] says.
 //!
 //! Times (`scheduled_onset_s`, `measured_onset_s`, `response_entered_s`) are seconds on the session's clock (the
 //! rig's: virtual on the mock lab), `trial_time_s` from the first onset to the response.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::duplicates::DuplicateAnswer;
 use crate::error::ExperimentError;
 use crate::file::Experiment;
+pub use crate::lock::JOURNAL_FILE;
+use crate::lock::SessionLock;
 use crate::plan::{Phase, Plan, PlannedTrial};
 
 /// The plan file of a session directory.
 pub const PLAN_FILE: &str = "plan.json";
-/// The journal file of a session directory.
-pub const JOURNAL_FILE: &str = "journal.jsonl";
 
 /// What `plan.json` holds.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -229,9 +232,30 @@ impl Session {
         plan: Plan,
         force: bool,
     ) -> Result<Self, ExperimentError> {
+        Self::start_locked(SessionLock::acquire_existing(dir)?, dir, experiment, participant, plan, force)
+    }
+
+    /// As [`Session::start`], with the session's lock taken already (`None`: take it now, creating `dir` for a new
+    /// session). A resumed session whose duplicated answers conflict is refused
+    /// ([`SessionRecord::check_duplicates`]).
+    ///
+    /// # Errors
+    /// As [`Session::start`]; [`ExperimentError::Locked`]; [`ExperimentError::ConflictingDuplicates`].
+    pub fn start_locked(
+        lock: Option<SessionLock>,
+        dir: &Path,
+        experiment: &Experiment,
+        participant: &str,
+        plan: Plan,
+        force: bool,
+    ) -> Result<Self, ExperimentError> {
+        let lock = match lock {
+            Some(lock) => lock,
+            None => SessionLock::create(dir)?,
+        };
+        let journal = lock.into_journal();
         let plan_path = dir.join(PLAN_FILE);
         if !plan_path.exists() {
-            std::fs::create_dir_all(dir).map_err(ExperimentError::io("create", dir))?;
             let header = SessionHeader {
                 experiment: experiment.name.clone(),
                 participant: participant.to_owned(),
@@ -244,19 +268,15 @@ impl Session {
             };
             let json = serde_json::to_vec_pretty(&header)
                 .map_err(|e| ExperimentError::Store { reason: format!("encoding the plan: {e}") })?;
-            // The journal first: a directory with a plan always has a journal next to it.
+            // The journal first (the lock created it): a directory with a plan always has a journal next to it.
             let journal_path = dir.join(JOURNAL_FILE);
-            let journal = OpenOptions::new()
-                .create(true)
-                .append(true)
-                .open(&journal_path)
-                .map_err(ExperimentError::io("create", &journal_path))?;
             journal.sync_all().map_err(ExperimentError::io("fsync", &journal_path))?;
             metaplate_store::write_bytes(dir, PLAN_FILE, &json)?;
             let progress = Progress::replay(&header.plan, &header.labels, &[])?;
             return Ok(Self { dir: dir.to_path_buf(), header, journal, progress });
         }
         let record = SessionRecord::read(dir)?;
+        record.check_duplicates(dir)?;
         let given_plan_hash = plan.hash();
         let given_file_hash = experiment.file_hash();
         let mismatch = if record.header.participant != participant {
@@ -269,8 +289,6 @@ impl Session {
             None
         };
         let journal_path = dir.join(JOURNAL_FILE);
-        let journal =
-            OpenOptions::new().append(true).open(&journal_path).map_err(ExperimentError::io("open", &journal_path))?;
         // Cut a torn last line, so the next entry starts on a line of its own.
         journal.set_len(record.journal_len).map_err(ExperimentError::io("truncate", &journal_path))?;
         let mut session = Self { dir: dir.to_path_buf(), header: record.header, journal, progress: record.progress };
@@ -281,6 +299,22 @@ impl Session {
             session.append(&Entry::Forced { given_plan_hash, given_file_hash })?;
         }
         Ok(session)
+    }
+
+    /// Opens the existing session in `dir` to append to it, whatever its plan (what `experiment correct` does),
+    /// taking its lock.
+    ///
+    /// # Errors
+    /// [`ExperimentError::Io`] for a directory without a session; [`ExperimentError::Locked`]; reading errors.
+    pub fn open(dir: &Path) -> Result<Self, ExperimentError> {
+        let Some(lock) = SessionLock::acquire_existing(dir)? else {
+            return Err(ExperimentError::Refused(format!("{} holds no session", dir.display())));
+        };
+        let journal = lock.into_journal();
+        let record = SessionRecord::read(dir)?;
+        let journal_path = dir.join(JOURNAL_FILE);
+        journal.set_len(record.journal_len).map_err(ExperimentError::io("truncate", &journal_path))?;
+        Ok(Self { dir: dir.to_path_buf(), header: record.header, journal, progress: record.progress })
     }
 
     /// The session's directory.
@@ -333,6 +367,8 @@ pub struct SessionRecord {
     pub progress: Progress,
     /// Whether the journal ended in a torn line.
     pub torn_tail: bool,
+    /// Trials journalled more than once (two writers at once, before sessions were locked), in journal order.
+    pub duplicates: Vec<DuplicateAnswer>,
     /// Length of the journal's complete lines, bytes.
     journal_len: u64,
 }
@@ -354,8 +390,25 @@ impl SessionRecord {
         let journal_path = dir.join(JOURNAL_FILE);
         let text = std::fs::read(&journal_path).map_err(ExperimentError::io("read", &journal_path))?;
         let (entries, journal_len, torn_tail) = parse_journal(&text, &journal_path)?;
-        let progress = Progress::replay(&header.plan, &header.labels, &entries)?;
-        Ok(Self { header, entries, progress, torn_tail, journal_len })
+        let (progress, duplicates) = replay_reading(&header.plan, &header.labels, &entries)?;
+        Ok(Self { header, entries, progress, torn_tail, duplicates, journal_len })
+    }
+
+    /// Refuses a session whose duplicated answers disagree and are not settled (see [`crate::duplicates`]).
+    ///
+    /// # Errors
+    /// [`ExperimentError::ConflictingDuplicates`] naming each such trial and its answers.
+    pub fn check_duplicates(&self, dir: &Path) -> Result<(), ExperimentError> {
+        let conflicts: Vec<String> = self
+            .duplicates
+            .iter()
+            .filter(|d| d.conflicts())
+            .map(|d| format!("trial {} ({})", d.trial, d.responses.join(", ")))
+            .collect();
+        if conflicts.is_empty() {
+            return Ok(());
+        }
+        Err(ExperimentError::ConflictingDuplicates { dir: dir.to_path_buf(), trials: conflicts.join(", ") })
     }
 
     /// The scored trials that have an answer, with their plan entries, in plan order.
@@ -369,6 +422,51 @@ impl SessionRecord {
             .filter_map(|(p, r)| r.as_ref().map(|r| (p, r)))
             .collect()
     }
+}
+
+/// Replays `entries` over `plan` as [`Progress::replay`] does, except that an answer to a trial already answered (and
+/// an undo of a trial whose answer a duplicate's undo already took back) is noted rather than refused.
+///
+/// # Errors
+/// [`ExperimentError::BadEntry`] for any other entry the plan refuses.
+pub fn replay_reading(
+    plan: &Plan,
+    labels: &[String],
+    entries: &[Entry],
+) -> Result<(Progress, Vec<DuplicateAnswer>), ExperimentError> {
+    let mut progress = Progress::replay(plan, labels, &[])?;
+    let mut duplicates: Vec<DuplicateAnswer> = Vec::new();
+    for entry in entries {
+        let answered = |t: u32| progress.results.get(t as usize).and_then(Option::as_ref);
+        match entry {
+            Entry::Trial(r) if answered(r.trial).is_some() => {
+                let first = answered(r.trial).map(|a| a.response.clone()).unwrap_or_default();
+                match duplicates.iter_mut().find(|d| d.trial == r.trial) {
+                    Some(d) => {
+                        d.responses.push(r.response.clone());
+                        d.settled = false;
+                    }
+                    None => duplicates.push(DuplicateAnswer {
+                        trial: r.trial,
+                        responses: vec![first, r.response.clone()],
+                        settled: false,
+                    }),
+                }
+                continue;
+            }
+            Entry::Undo { trial, .. } if answered(*trial).is_none() && duplicates.iter().any(|d| d.trial == *trial) => {
+                continue;
+            }
+            Entry::Correction { trial, .. } | Entry::Undo { trial, .. } | Entry::Void { trial, .. } => {
+                if let Some(d) = duplicates.iter_mut().find(|d| d.trial == *trial) {
+                    d.settled = true;
+                }
+            }
+            Entry::Trial(_) | Entry::Forced { .. } => {}
+        }
+        progress.apply(plan, labels, entry)?;
+    }
+    Ok((progress, duplicates))
 }
 
 /// The entries of a journal's bytes, the length of its complete lines, and whether a torn last line was left out.
@@ -400,6 +498,8 @@ fn parse_journal(bytes: &[u8], path: &Path) -> Result<(Vec<Entry>, u64, bool), E
 #[cfg(test)]
 #[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
 mod tests {
+    use std::fs::OpenOptions;
+
     use super::*;
     use crate::builtin::builtin;
 

@@ -7,10 +7,17 @@
 //! - [`plan`]: the full trial plan from a file and a seed, and its hash;
 //! - [`journal`]: a session's directory: the stored plan and the append-only, fsync'd journal; resume;
 //! - [`participant`]: the simulated participant, a documented psychometric model of the predicted field;
-//! - [`stats`]: Wilson 95 % intervals, exact binomial p values against chance, confusion matrices.
+//! - [`stats`]: Wilson 95 % intervals, exact binomial p values against chance, confusion matrices;
+//! - [`lock`]: one writer per session; [`duplicates`]: trials a journal answers more than once; [`settle`]: a
+//!   correction that settles one;
+//! - [`stimulus`]: a stimulus rendered through the calibration and checked, ready to play (recipes' `play`);
+//! - [`runner`]: one participant's session on a rig (`experiment run`), answered by the simulated participant or
+//!   the experimenter's console (a trait; [`console`] reads the terminal and the keypad on threads);
+//! - [`report`]: the report of session directories (`experiment report`; its Parquet, [`trials_parquet`]);
+//!   [`listing`]: the built-ins as `experiment list` prints them;
+//! - [`stimuli`]: how well a scan renders experiments' stimuli (`experiment stimuli`).
 //!
-//! This crate knows no rig: rendering drives from a stimulus ([`file::Stimulus::waveforms`] gives control's
-//! `Waveform` per pixel), playing them and reading responses are the runner's.
+//! The rig itself is the caller's: the runner plays on the `Rig` it is handed.
 //!
 //! # The experiment file
 //! TOML; SI units, the unit in each key's name (times in seconds, frequencies in hertz, positions in metres in the
@@ -57,13 +64,24 @@
 //! -20 dB FS RMS (the paper gives no level), played as [`masking`] says.
 
 pub mod builtin;
+pub mod console;
+pub mod duplicates;
 pub mod error;
 pub mod file;
 pub mod journal;
+pub mod listing;
+pub mod lock;
 pub mod masking;
 pub mod participant;
 pub mod plan;
+pub mod report;
+pub mod runner;
+pub mod settle;
 pub mod stats;
+pub mod stimuli;
+pub mod stimulus;
+mod trial;
+pub mod trials_parquet;
 
 pub use error::ExperimentError;
 pub use file::{Experiment, Pattern, Pixel, Stimulus};
