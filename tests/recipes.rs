@@ -210,7 +210,29 @@ fn resume_after_ctrl_c_completes_the_same_configuration() {
     let events: Vec<Value> = text(&out.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     let started = &events[0];
     assert!(started["done"].as_u64().unwrap() >= 1, "resume starts after the committed points: {started}");
+    assert_eq!(started["resumed"], true, "{started}");
     assert_eq!(events.last().unwrap()["event"], "finished");
+}
+
+#[test]
+fn resume_into_a_directory_without_a_run_says_plainly_that_a_new_run_starts() {
+    let cache = cache_dir();
+    let tmp = tempfile::tempdir().unwrap();
+    // A mistyped directory on the morning after: nothing to resume there.
+    let dir = tmp.path().join("scna");
+    let out = run(&scan_args(&dir, &["--uncalibrated", "--json", "--resume"]), cache);
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("holds no run to resume; a new run starts at 0"), "{stderr}");
+    let started: Value = serde_json::from_str(text(&out.stdout).lines().next().unwrap()).unwrap();
+    assert_eq!((started["event"].as_str(), started["resumed"].as_bool()), (Some("started"), Some(false)), "{started}");
+    assert_eq!(started["done"], 0);
+    assert_complete_scan(&dir);
+    // Without --resume a new run says nothing of it, and its `started` says `"resumed": false` too.
+    let fresh = run(&scan_args(&tmp.path().join("fresh"), &["--uncalibrated", "--json"]), cache);
+    assert!(!text(&fresh.stderr).contains("no run to resume"), "{}", text(&fresh.stderr));
+    let started: Value = serde_json::from_str(text(&fresh.stdout).lines().next().unwrap()).unwrap();
+    assert_eq!(started["resumed"], false);
 }
 
 #[test]

@@ -15,7 +15,7 @@ use std::time::Instant;
 use metaplate_core::scene::Scene;
 use metaplate_dsp::excitation::ExcitationProtocol;
 use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::scan::{ScanConfig, ScanPlan, scan};
+use metaplate_recipes::scan::{ScanConfig, ScanPoints, scan};
 use metaplate_recipes::{Event, Output, RunControl};
 
 struct Args {
@@ -40,7 +40,7 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
 fn main() -> Result<(), Box<dyn Error>> {
     let args = parse_args()?;
     let scene = Scene::builtin("metamaterial")?;
-    let mut plan = ScanPlan::new(scene.grid, &scene.grid_mask(), None)?;
+    let mut plan = ScanPoints::new(scene.grid, &scene.grid_mask(), None)?;
     if let Some(n) = args.points {
         plan.points.truncate(n.max(1));
     }

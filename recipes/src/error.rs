@@ -37,6 +37,15 @@ pub enum RecipeError {
     /// The dataset could not be written or read.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// Rendering a pattern's drives failed (a pixel off the plate or in a gap of the scan, a bad target).
+    #[error(transparent)]
+    Control(#[from] metaplate_control::ControlError),
+    /// A pattern cannot be played as asked (a dataset or calibration that does not fit it, a rig of another plate).
+    #[error("{reason}")]
+    PlayRefused {
+        /// Why, naming the dataset, calibration or plate.
+        reason: String,
+    },
     /// The calibration dataset is missing, incomplete or inconsistent.
     #[error("calibration {dir}: {reason}")]
     Calibration {

@@ -95,6 +95,9 @@ pub enum Event {
         dataset: std::path::PathBuf,
         /// The dataset's configuration hash (`sha256:<hex>`), as its manifest holds it.
         config_hash: String,
+        /// Whether an earlier run in the directory was continued; false for a new dataset, also when a resume was
+        /// asked for a directory that held no run (the observer says so).
+        resumed: bool,
     },
     /// What the run is doing now, for a live display: sent as each step of a unit begins.
     Phase {

@@ -10,14 +10,17 @@
 //! Randomness (beam nudges) is keyed by (seed, unit, visit, nudge), never drawn from a running generator, so a
 //! resumed run makes the same choices as an uninterrupted one.
 
+pub mod cells;
 pub mod drive;
 pub mod engine;
 pub mod error;
 pub mod events;
+pub mod notify;
 pub mod output;
 pub mod plans;
 pub mod play;
 pub mod preflight;
+pub mod progress;
 pub mod quality;
 pub mod remaining;
 
@@ -29,5 +32,6 @@ pub use error::RecipeError;
 pub use events::{Event, Observer, Phase, RunControl, Silent, UnitPosition};
 pub use output::Output;
 pub use plans::calibrate::{self, Calibration, CalibrationConfig, calibrate};
-pub use plans::scan::{self, ScanConfig, ScanPlan, ScanSummary, scan};
+pub use plans::scan::{self, ScanConfig, ScanPoints, ScanSummary, scan};
+pub use progress::{EventLine, RunProgress, RunSummary};
 pub use remaining::RemainingTime;

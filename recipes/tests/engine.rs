@@ -136,7 +136,7 @@ impl Plan for Rms {
 
 /// A fresh mock lab of the built-in metamaterial scene (a restarted program) and its 7 x 5 scan plan (the lab
 /// shares the other recipe tests' cached Green's functions).
-fn lab() -> (metaplate_lab::MockLab, metaplate_recipes::ScanPlan) {
+fn lab() -> (metaplate_lab::MockLab, metaplate_recipes::ScanPoints) {
     lab_and_plan(&metamaterial(), 7, 5)
 }
 

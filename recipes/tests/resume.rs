@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use common::{
     Recorder, assert_same_rows, image, metamaterial, output, quick_config, run_scan, run_scan_with, small_plan,
 };
-use metaplate_recipes::scan::{ScanConfig, ScanPlan, scan};
+use metaplate_recipes::scan::{ScanConfig, ScanPoints, scan};
 use metaplate_recipes::{Event, RecipeError, RunControl, Silent};
 use metaplate_store::{Dataset, StoreError};
 
@@ -98,7 +98,7 @@ fn stopped_and_abandoned_runs_resume_to_the_uninterrupted_dataset() {
 
 /// A 3-point metamaterial scan stopped after its first commit: the scene, the plan, the dataset's directory and
 /// the points committed.
-fn scan_stopped_after_one_point() -> (metaplate_core::scene::Scene, ScanPlan, tempfile::TempDir, usize) {
+fn scan_stopped_after_one_point() -> (metaplate_core::scene::Scene, ScanPoints, tempfile::TempDir, usize) {
     let scene = metamaterial();
     let plan = small_plan(3);
     let dir = tempfile::tempdir().unwrap();

@@ -2,9 +2,10 @@
 //! and a verification through it; one commit per actuator, resumable.
 
 use clap::Args;
+use metaplate_lab::LabOptions;
 use metaplate_recipes::{CalibrationConfig, RunControl, calibrate};
 
-use crate::rig::{self, Plate};
+use crate::rig::{self, Opened};
 use crate::run::{self, Reporter, RunArgs};
 
 /// Arguments of `metaplate calibrate`.
@@ -23,18 +24,10 @@ pub struct CalibrateArgs {
 pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     let common = &args.run;
     run::init_log(&common.out, "calibrate")?;
-    let (plate, mut rig, _lab) = match (&common.source.scene, &common.source.hardware) {
-        (_, Some(file)) => {
-            let (plate, rig) = rig::hardware_rig(file)?;
-            (plate, rig, None)
-        }
-        (Some(scene), None) => {
-            let plate = Plate::resolve(scene)?;
-            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), common.seed, common.cache.dir())?;
-            (plate, rig, Some(lab))
-        }
-        (None, None) => anyhow::bail!("give --scene or --hardware"),
-    };
+    let Opened { plate, mut rig, lab: _lab, .. } = rig::open(&common.source, |plate| {
+        let points = Some(plate.driving_points());
+        Ok(LabOptions { seed: common.seed, cache_dir: common.cache.dir(), points, ..LabOptions::default() })
+    })?;
     let config = CalibrationConfig { seed: common.seed.unwrap_or(plate.scene.seed), ..CalibrationConfig::default() };
     let control = RunControl::new();
     let mut reporter = Reporter::new("calibrate", "actuators", common);
@@ -44,16 +37,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     let results = run::conclude(result, common)?;
     if !common.json {
         for r in &results {
-            eprintln!(
-                "actuator {}: {} (flat within {:.2} dB; {:.2} dB on pyfar's standard smoothing; {} attempt(s), boost \
-                 {:.1} dB)",
-                r.actuator,
-                r.status.as_str(),
-                r.flatness.deviation_db(),
-                r.standard_flatness.deviation_db(),
-                r.attempts,
-                r.filter.max_boost_db
-            );
+            eprintln!("{r}");
         }
         eprintln!("calibration written to {}", common.out.display());
     }

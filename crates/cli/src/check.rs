@@ -12,17 +12,13 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use metaplate_core::grid::GridSubset;
-use metaplate_core::rig::Rig;
 use metaplate_dsp::excitation::ExcitationProtocol;
-use metaplate_keypad::{HidInput, Keypad};
 use metaplate_lab::{LabOptions, LdvLink};
-use metaplate_recipes::preflight::{CheckOutcome, PlannedRun, PreflightConfig, preflight};
-use metaplate_recipes::{ScanPlan, rig_config};
-use serde_json::{Value, json};
+use metaplate_recipes::ScanPoints;
+use metaplate_recipes::preflight::{CheckOutcome, PlannedRun, PreflightConfig, keypad_check, preflight};
 
-use crate::rig::{self, Plate};
+use crate::rig::{self, Opened};
 use crate::run::{EXIT_FLAGGED, Source};
-use crate::scan::plan;
 
 /// Arguments of `metaplate check`.
 #[derive(Args, Debug)]
@@ -71,44 +67,31 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     if !(args.keypad_wait_s.is_finite() && args.keypad_wait_s >= 0.0) {
         anyhow::bail!("--keypad-wait-s {} must be finite and >= 0", args.keypad_wait_s);
     }
-    let mut keypad = None;
-    let (plate, mut rig, _lab, plan, disk_budget) = match (&args.source.scene, &args.source.hardware) {
-        (_, Some(file)) => {
-            let (plate, opened) = rig::hardware_rig_and_keypad(file)?;
-            keypad = opened.keypad;
-            let plan = plan(&plate, args.grid)?;
-            (plate, opened.rig, None, plan, None)
-        }
-        (Some(scene), None) => {
-            let plate = Plate::resolve(scene)?;
-            let plan = plan(&plate, args.grid)?;
-            // A small plan is prepared whole (shared with a scan of it); a large one: the LDV points only.
-            let points = plate.small_plan_points(&plan).unwrap_or_else(|| {
-                let mut points = ldv_points(&plan);
-                points.extend(plate.driving_points());
-                points
-            });
-            let ldv_link = if args.ldv_pty { LdvLink::Pty } else { LdvLink::InProcess };
-            let options = LabOptions {
-                seed: args.seed,
-                cache_dir: args.cache.dir(),
-                points: Some(points),
-                ldv_link,
-                ..LabOptions::default()
-            };
-            let (lab, rig) = rig::mock_rig_with(&plate, &options)?;
-            let budget = plate.scene.setup.disk_free_bytes;
-            (plate, rig, Some(lab), plan, budget)
-        }
-        (None, None) => anyhow::bail!("give --scene or --hardware"),
-    };
+    let Opened { plate, mut rig, mut keypad, lab } = rig::open(&args.source, |plate| {
+        let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
+        // A small plan is prepared whole (shared with a scan of it); a large one: the LDV points only.
+        let points = plate
+            .small_plan_points(&plan)
+            .unwrap_or_else(|| [plan.spread(LDV_POINTS), plate.driving_points()].concat());
+        let ldv_link = if args.ldv_pty { LdvLink::Pty } else { LdvLink::InProcess };
+        Ok(LabOptions {
+            seed: args.seed,
+            cache_dir: args.cache.dir(),
+            points: Some(points),
+            ldv_link,
+            ..Default::default()
+        })
+    })?;
+    let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
+    // The lab's disk stands for the lab computer's free space.
+    let disk_budget = lab.as_ref().and(plate.scene.setup.disk_free_bytes);
     let free_bytes = match (metaplate_store::free_bytes(&args.out), disk_budget) {
         (Some(free), Some(budget)) => Some(free.min(budget)),
         (free, budget) => free.or(budget),
     };
     let mut config = PreflightConfig::new(
         plate.actuator_sites_m(),
-        ldv_points(&plan).into_iter().map(|p| plate.scene.grid.position_m(p)).collect(),
+        plan.spread(LDV_POINTS).into_iter().map(|p| plate.scene.grid.position_m(p)).collect(),
     );
     config.planned =
         Some(PlannedRun { points: plan.points.len(), protocol, out_dir: args.out.display().to_string(), free_bytes });
@@ -130,13 +113,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         print(&outcome);
         report.checks.push(outcome);
     }
-    let mut document = report.to_json();
-    if let Some(object) = document.as_object_mut() {
-        object.insert("checked_at".into(), json!(chrono::Utc::now().to_rfc3339()));
-        object.insert("plate".into(), json!({"name": plate.id.name, "hash": plate.id.hash}));
-        object.insert("software_version".into(), json!(env!("CARGO_PKG_VERSION")));
-        object.insert("rig".into(), rig_identity(&mut rig));
-    }
+    let document = report.document(&plate.id, env!("CARGO_PKG_VERSION"), &mut rig);
     if let Some(path) = &args.report {
         write_report(path, &document)?;
     }
@@ -151,30 +128,8 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The keypad answers: with `wait_s > 0` a key pressed within that time, otherwise only that it opened.
-fn keypad_check(keypad: &mut Keypad<impl HidInput>, wait_s: f64) -> CheckOutcome {
-    let (vendor, product, serial) = keypad.transport().describe();
-    let who = format!("{vendor} {product} (serial {serial})");
-    let details = json!({"vendor": vendor, "product": product, "serial": serial, "waited_s": wait_s});
-    if wait_s == 0.0 {
-        let message = format!("{who} opened; its keys were not tested (--keypad-wait-s 10 to test them)");
-        return CheckOutcome { name: "keypad", passed: true, message, details };
-    }
-    let (passed, message) = match keypad.next_event(wait_s) {
-        Ok(Some(event)) => (true, format!("{who} answers: key 0x{:02x} {:?}", event.key.usage(), event.action)),
-        Ok(None) => (false, format!("{who} opened, but no key was pressed within {wait_s} s: is it the right device?")),
-        Err(e) => (false, format!("{who}: {e}")),
-    };
-    CheckOutcome { name: "keypad", passed, message, details }
-}
-
-/// The rig as the datasets record it (identities and wiring), or why it could not be read.
-fn rig_identity(rig: &mut Rig) -> Value {
-    rig_config(rig).unwrap_or_else(|e| json!({"error": e.to_string()}))
-}
-
 /// Writes the report durably (a temporary file, fsync'd, renamed): a report that exists is whole.
-fn write_report(path: &std::path::Path, document: &Value) -> anyhow::Result<()> {
+fn write_report(path: &std::path::Path, document: &serde_json::Value) -> anyhow::Result<()> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
     let mut file = tempfile::NamedTempFile::new_in(dir)
         .with_context(|| format!("cannot write the report beside {}", path.display()))?;
@@ -182,43 +137,4 @@ fn write_report(path: &std::path::Path, document: &Value) -> anyhow::Result<()> 
     file.as_file().sync_all()?;
     file.persist(path).with_context(|| format!("cannot write the report {}", path.display()))?;
     Ok(())
-}
-
-/// [`LDV_POINTS`] points spread along the plan (at a quarter, half and three quarters of its path).
-fn ldv_points(plan: &ScanPlan) -> Vec<usize> {
-    let n = plan.points.len();
-    let mut points: Vec<usize> = (1..=LDV_POINTS).map(|k| plan.points[(k * n / (LDV_POINTS + 1)).min(n - 1)]).collect();
-    points.dedup();
-    points
-}
-
-#[cfg(test)]
-mod tests {
-    #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
-
-    use std::sync::Arc;
-
-    use metaplate_core::clock::VirtualClock;
-    use metaplate_keypad::{ReportPrefix, ScriptStep, ScriptedHid};
-
-    use super::*;
-
-    /// A keypad that sends `reports` (each after `after_s` of virtual time), then nothing.
-    fn pad(reports: Vec<(f64, [u8; 8])>) -> Keypad<ScriptedHid> {
-        let clock = Arc::new(VirtualClock::new());
-        let script = reports.into_iter().map(|(after_s, bytes)| ScriptStep::boot_report(after_s, bytes)).collect();
-        Keypad::new(ScriptedHid::new(&clock, script), clock, ReportPrefix::None)
-    }
-
-    #[test]
-    fn a_key_pressed_in_time_passes_and_silence_fails_by_name() {
-        // Boot keyboard report: modifiers, reserved, six key slots; 0x1e is the key `1`.
-        let press = [0, 0, 0x1e, 0, 0, 0, 0, 0];
-        let outcome = keypad_check(&mut pad(vec![(2.0, press)]), 10.0);
-        assert!(outcome.passed && outcome.message.contains("key 0x1e Down"), "{}", outcome.message);
-        let late = keypad_check(&mut pad(vec![(12.0, press)]), 10.0);
-        assert!(!late.passed && late.message.contains("no key was pressed within 10 s"), "{}", late.message);
-        let unasked = keypad_check(&mut pad(Vec::new()), 0.0);
-        assert!(unasked.passed && unasked.message.contains("not tested"), "{}", unasked.message);
-    }
 }

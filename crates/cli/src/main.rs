@@ -19,8 +19,6 @@ mod export;
 mod focus;
 mod import;
 mod monitor;
-mod notify;
-mod paper_table;
 mod play;
 mod progress;
 mod replay;
@@ -32,7 +30,6 @@ mod scene;
 mod simulate;
 mod sweep;
 mod tradeoff;
-mod truth;
 mod wav;
 
 #[derive(Parser)]
@@ -123,15 +120,7 @@ fn main() -> std::process::ExitCode {
     let Err(error) = dispatch(cli.command) else { return std::process::ExitCode::SUCCESS };
     let message = format!("{error:#}");
     if let Some((recipe, args)) = run {
-        run::log_failure(&message);
-        let failed = serde_json::json!({"event": "failed", "recipe": recipe, "error": message,
-            "dataset": args.out.display().to_string()});
-        if args.json {
-            println!("{failed}");
-        }
-        if let Some(command) = args.notify_command {
-            notify::Notifier::new(command).notify("failed", "failed", failed);
-        }
+        run::report_failure(recipe, &args, &message);
     }
     eprintln!("error: {message}");
     std::process::ExitCode::FAILURE

@@ -1,46 +1,18 @@
-//! Building the [`Rig`] a recipe runs on: the mock lab of a scene (`--scene`), or the real instruments named by a
-//! hardware file (`--hardware FILE`), opened through the driver registry (`metaplate-drivers`, which documents the
-//! file's format; `cli/hardware.example.toml` is an example). Which backends this binary has is its cargo features
-//! (default `hardware`: all of them); a file naming a missing one is refused before anything is opened.
+//! The [`Rig`] a command runs on: the mock lab of a scene (`--scene`), or the real instruments a hardware file names
+//! (`--hardware FILE`), opened by the driver registry ([`metaplate_drivers::open_plate_rig`], which documents the
+//! file's format and checks its wiring against its plate; `cli/hardware.example.toml` is an example). Which backends
+//! this binary has is its cargo features (default `hardware`: all of them).
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use metaplate_core::rig::Rig;
 use metaplate_core::scene::Scene;
-use metaplate_drivers::{HardwareError, HardwareFile, OpenedRig};
+use metaplate_drivers::OpenedRig;
 use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::ScanPlan;
+use metaplate_recipes::ScanPoints;
 use metaplate_store::SceneId;
 
-/// Why a rig could not be built.
-#[derive(Debug)]
-pub enum RigError {
-    /// The hardware file is invalid, names a backend this build lacks, or an instrument could not be opened.
-    Hardware(HardwareError),
-    /// The hardware file's wiring does not fit its plate.
-    Plate {
-        /// The file.
-        path: PathBuf,
-        /// What does not fit.
-        reason: String,
-    },
-    /// The mock lab of a scene could not be built.
-    Lab(String),
-}
-
-impl fmt::Display for RigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            RigError::Hardware(e) => e.fmt(f),
-            RigError::Plate { path, reason } => write!(f, "hardware file {}: {reason}", path.display()),
-            RigError::Lab(detail) => write!(f, "cannot build the mock lab: {detail}"),
-        }
-    }
-}
-
-// No `source`: the message of `Hardware` is its inner error's, which anyhow would print twice.
-impl std::error::Error for RigError {}
+use crate::run::Source;
 
 /// The plate a run measures: its geometry (grid, mask, actuator positions) and its identity in the dataset.
 #[derive(Debug, Clone)]
@@ -52,15 +24,19 @@ pub struct Plate {
 }
 
 impl Plate {
-    /// The plate of the scene `name_or_path` (a built-in name or a scene file).
+    /// The plate of the scene `name_or_path` (a built-in name or a scene file), validated.
     ///
     /// # Errors
     /// The scene's error (not found, invalid, with the key path).
     pub fn resolve(name_or_path: &str) -> anyhow::Result<Self> {
         let scene = Scene::resolve(name_or_path)?;
         scene.validate()?;
+        Ok(Self::of(scene))
+    }
+
+    fn of(scene: Scene) -> Self {
         let id = scene.id();
-        Ok(Self { scene, id })
+        Self { scene, id }
     }
 
     /// Each actuator's magnet position, m, in actuator order.
@@ -74,16 +50,11 @@ impl Plate {
         (0..self.scene.actuators.len()).map(|k| n + k).collect()
     }
 
-    /// The points a mock lab prepares for `plan` when the plan is small (at most [`PREPARE_WHOLE_PLAN_POINTS`]):
-    /// the plan's points and the actuators' driving points, so a `check`, and a scan of the same plan share one
-    /// Green's-function cache entry (the plate model's cost does not depend on the points). `None` for a larger
-    /// plan, whose caller prepares only what it visits.
-    pub fn small_plan_points(&self, plan: &ScanPlan) -> Option<Vec<usize>> {
-        (plan.points.len() <= PREPARE_WHOLE_PLAN_POINTS).then(|| {
-            let mut points = plan.points.clone();
-            points.extend(self.driving_points());
-            points
-        })
+    /// The points a mock lab prepares for `plan` when it is small (at most [`PREPARE_WHOLE_PLAN_POINTS`]): its
+    /// points and the driving points, so a `check` and a scan of the same plan share one Green's-function cache
+    /// entry. `None` for a larger plan, whose caller prepares only what it visits.
+    pub fn small_plan_points(&self, plan: &ScanPoints) -> Option<Vec<usize>> {
+        (plan.points.len() <= PREPARE_WHOLE_PLAN_POINTS).then(|| [plan.points.clone(), self.driving_points()].concat())
     }
 }
 
@@ -91,114 +62,75 @@ impl Plate {
 /// of 8 responses of 0.5 s take 100 MB).
 pub const PREPARE_WHOLE_PLAN_POINTS: usize = 64;
 
-/// The mock lab of `plate`'s scene, preparing only `points` (Green's functions are computed, or read from
-/// `cache_dir`, for those alone), with its rig. Keep the lab alive while the rig is used.
+/// The mock lab of `plate`'s scene preparing only `points`, with its rig. Keep the lab alive while the rig is used.
 ///
 /// # Errors
-/// [`RigError::Lab`] with the lab's reason.
+/// The lab's reason.
 pub fn mock_rig(
     plate: &Plate,
     points: Vec<usize>,
     seed: Option<u64>,
     cache_dir: Option<PathBuf>,
-) -> Result<(MockLab, Rig), RigError> {
+) -> anyhow::Result<(MockLab, Rig)> {
     mock_rig_with(plate, &LabOptions { seed, cache_dir, points: Some(points), ..LabOptions::default() })
 }
 
-/// The mock lab of `plate`'s scene with `options` (which points it prepares, how its LDV is served, ...), with its
-/// rig. Keep the lab alive while the rig is used.
+/// The mock lab of `plate`'s scene with `options`, with its rig. Keep the lab alive while the rig is used.
 ///
 /// # Errors
-/// [`RigError::Lab`] with the lab's reason.
-pub fn mock_rig_with(plate: &Plate, options: &LabOptions) -> Result<(MockLab, Rig), RigError> {
-    let lab = MockLab::new(&plate.scene, options).map_err(|e| RigError::Lab(e.to_string()))?;
-    let rig = lab.rig().map_err(|e| RigError::Lab(e.to_string()))?;
+/// The lab's reason.
+pub fn mock_rig_with(plate: &Plate, options: &LabOptions) -> anyhow::Result<(MockLab, Rig)> {
+    let lab = MockLab::new(&plate.scene, options).map_err(|e| anyhow::anyhow!("cannot build the mock lab: {e}"))?;
+    let rig = lab.rig().map_err(|e| anyhow::anyhow!("cannot build the mock lab: {e}"))?;
     Ok((lab, rig))
 }
 
-/// The plate and rig described by the hardware file at `path`: every instrument opened through its backend (the
-/// audio interface configured once, so that a missing card is found now rather than at the first point), on the
-/// real clock.
+/// The plate and rig of the hardware file at `path`, every instrument opened (a keypad it names too, unused).
 ///
 /// # Errors
-/// [`RigError::Hardware`] for the file, a backend this build lacks, or the first instrument that cannot be opened;
-/// [`RigError::Plate`] when the wiring does not fit the plate; the plate scene's error.
+/// The file, its plate, a backend this build lacks, or the first instrument that cannot be opened.
 pub fn hardware_rig(path: &Path) -> anyhow::Result<(Plate, Rig)> {
-    // A keypad, if the file names one, is opened too (so that its absence is found now) and unused: no recipe
-    // reads it yet.
     let (plate, opened) = hardware_rig_and_keypad(path)?;
     Ok((plate, opened.rig))
 }
 
-/// As [`hardware_rig`], with the keypad the file names, if any ([`OpenedRig::keypad`]).
+/// As [`hardware_rig`], with the keypad the file names, if any.
 ///
 /// # Errors
 /// As [`hardware_rig`].
 pub fn hardware_rig_and_keypad(path: &Path) -> anyhow::Result<(Plate, OpenedRig)> {
-    let file = HardwareFile::load(path).map_err(RigError::Hardware)?;
-    let plate = Plate::resolve(&file.plate)?;
-    let actuators = file.wiring.actuator_channels.len();
-    if actuators != plate.scene.actuators.len() {
-        let reason = format!(
-            "wiring.actuator_channels lists {actuators} actuators, the plate `{}` has {}",
-            file.plate,
-            plate.scene.actuators.len()
-        );
-        return Err(RigError::Plate { path: path.to_path_buf(), reason }.into());
-    }
-    let opened = metaplate_drivers::open_rig(&file).map_err(RigError::Hardware)?;
-    Ok((plate, opened))
+    let (scene, opened) = metaplate_drivers::open_plate_rig(path)?;
+    Ok((Plate::of(scene), opened))
 }
 
-#[cfg(test)]
-mod tests {
-    #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
+/// A rig opened as `--scene` or `--hardware` asks, with what keeps it alive.
+pub struct Opened {
+    /// The plate.
+    pub plate: Plate,
+    /// The rig.
+    pub rig: Rig,
+    /// The hardware file's keypad, if it names one.
+    pub keypad: Option<metaplate_keypad::Keypad<Box<dyn metaplate_keypad::HidInput>>>,
+    /// The mock lab behind a `--scene` rig (dropped last).
+    pub lab: Option<MockLab>,
+}
 
-    use super::*;
-
-    const EXAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/hardware.example.toml");
-
-    #[test]
-    fn the_example_file_parses_to_a_valid_wiring() {
-        let file = HardwareFile::load(Path::new(EXAMPLE)).unwrap();
-        assert_eq!(file.plate, "metamaterial");
-        let wiring = file.wiring();
-        assert_eq!(wiring.actuator_channels, (0..8).collect::<Vec<u32>>());
-        assert_eq!((wiring.loopback_channel, wiring.audio_channels), (8, 10));
-        let backends: Vec<_> = file.backends().into_iter().map(|(_, name)| name).collect();
-        assert_eq!(backends, ["serial", "usb-bulk", "alsa"]);
-    }
-
-    /// Writes the example with `edit` applied, in a temporary directory.
-    fn edited(edit: impl Fn(String) -> String) -> (tempfile::TempDir, PathBuf) {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("hardware.toml");
-        std::fs::write(&path, edit(std::fs::read_to_string(EXAMPLE).unwrap())).unwrap();
-        (dir, path)
-    }
-
-    #[test]
-    #[cfg(feature = "serial")]
-    fn a_missing_serial_port_is_named_in_the_error() {
-        let missing = "/dev/metaplate-no-such-port";
-        let (_dir, path) = edited(|text| {
-            let start = text.find("port = ").unwrap();
-            let end = start + text[start..].find('\n').unwrap();
-            format!("{}port = \"{missing}\"{}", &text[..start], &text[end..])
-        });
-        let error = hardware_rig(&path).err().unwrap();
-        let rig_error = error.downcast_ref::<RigError>().unwrap();
-        let is_ldv = matches!(rig_error, RigError::Hardware(HardwareError::Device { device: "LDV", .. }));
-        assert!(is_ldv, "{rig_error:?}");
-        let message = error.to_string();
-        assert!(message.contains("LDV") && message.contains(missing), "{message}");
-    }
-
-    #[test]
-    fn a_wiring_that_does_not_fit_the_plate_is_refused_before_opening_anything() {
-        let (_dir, path) = edited(|text| text.replace("[0, 1, 2, 3, 4, 5, 6, 7]", "[0, 1, 2, 3, 4, 5, 6]"));
-        let error = hardware_rig(&path).err().unwrap();
-        let message = error.to_string();
-        assert!(message.contains("lists 7 actuators") && message.contains("has 8"), "{message}");
+/// Opens the rig of `source`: the hardware file's instruments, or the mock lab of the scene with the options
+/// `lab_options` gives for its plate (which points it prepares, its seed and cache).
+///
+/// # Errors
+/// The plate's, the file's, the lab's or an instrument's error.
+pub fn open(source: &Source, lab_options: impl FnOnce(&Plate) -> anyhow::Result<LabOptions>) -> anyhow::Result<Opened> {
+    match (&source.scene, &source.hardware) {
+        (_, Some(file)) => {
+            let (plate, opened) = hardware_rig_and_keypad(file)?;
+            Ok(Opened { plate, rig: opened.rig, keypad: opened.keypad, lab: None })
+        }
+        (Some(scene), None) => {
+            let plate = Plate::resolve(scene)?;
+            let (lab, rig) = mock_rig_with(&plate, &lab_options(&plate)?)?;
+            Ok(Opened { plate, rig, keypad: None, lab: Some(lab) })
+        }
+        (None, None) => anyhow::bail!("give --scene or --hardware"),
     }
 }

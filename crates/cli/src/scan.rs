@@ -6,10 +6,11 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use metaplate_core::grid::GridSubset;
-use metaplate_dsp::excitation::{ExcitationProtocol, NAMES as PROTOCOL_NAMES};
-use metaplate_recipes::{Calibration, RunControl, ScanConfig, ScanPlan, scan};
+use metaplate_dsp::excitation::ExcitationProtocol;
+use metaplate_lab::LabOptions;
+use metaplate_recipes::{Calibration, RunControl, ScanConfig, ScanPoints, scan};
 
-use crate::rig::{self, Plate};
+use crate::rig::{self, Opened};
 use crate::run::{self, Reporter, RunArgs};
 
 /// Which inverse filters drive the actuators: exactly one of `--calibration` and `--uncalibrated`.
@@ -43,7 +44,7 @@ pub struct ScanArgs {
     #[arg(long)]
     pub grid: Option<GridSubset>,
     /// Excitation protocol (the list below is the excitation-protocol registry).
-    #[arg(long, default_value = "paper", long_help = protocol_help())]
+    #[arg(long, default_value = "paper", long_help = metaplate_dsp::excitation::help_text())]
     pub protocol: String,
 }
 
@@ -52,28 +53,17 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     let common = &args.run;
     let protocol = ExcitationProtocol::by_name(&args.protocol)?;
     run::init_log(&common.out, "scan")?;
-    let (plate, mut rig, _lab, plan) = match (&common.source.scene, &common.source.hardware) {
-        (_, Some(file)) => {
-            let (plate, rig) = rig::hardware_rig(file)?;
-            let plan = plan(&plate, args.grid)?;
-            (plate, rig, None, plan)
-        }
-        (Some(scene), None) => {
-            let plate = Plate::resolve(scene)?;
-            let plan = plan(&plate, args.grid)?;
-            let points = plate.small_plan_points(&plan).unwrap_or_else(|| plan.points.clone());
-            let (lab, rig) = rig::mock_rig(&plate, points, common.seed, common.cache.dir())?;
-            (plate, rig, Some(lab), plan)
-        }
-        (None, None) => anyhow::bail!("give --scene or --hardware"),
+    let Opened { plate, mut rig, lab: _lab, .. } = rig::open(&common.source, |plate| {
+        let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
+        let points = plate.small_plan_points(&plan).unwrap_or(plan.points);
+        Ok(LabOptions { seed: common.seed, cache_dir: common.cache.dir(), points: Some(points), ..Default::default() })
+    })?;
+    let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
+    let actuators = rig.wiring.actuator_channels.len();
+    let load = |dir: &PathBuf| {
+        Calibration::load(dir, actuators).with_context(|| format!("reading the calibration in {}", dir.display()))
     };
-    let calibration = match &args.drive.calibration {
-        Some(dir) => Some(
-            Calibration::load(dir, rig.wiring.actuator_channels.len())
-                .with_context(|| format!("reading the calibration in {}", dir.display()))?,
-        ),
-        None => None,
-    };
+    let calibration = args.drive.calibration.as_ref().map(load).transpose()?;
     let config = ScanConfig { protocol, seed: common.seed.unwrap_or(plate.scene.seed), ..ScanConfig::default() };
     let control = RunControl::new();
     let mut reporter = Reporter::new("scan", "points", common);
@@ -82,32 +72,8 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     let result = scan(&mut rig, &plan, calibration.as_ref(), &config, &output, &control, &mut reporter);
     let summary = run::conclude(result, common)?;
     if !common.json {
-        let statuses: Vec<String> = summary.statuses.iter().map(|(s, n)| format!("{n} {s}")).collect();
-        eprintln!(
-            "{} of {} points committed ({} now: rows {}; {} deferred), {:.2} h on the rig's clock; dataset in {}",
-            summary.committed,
-            summary.total,
-            summary.committed_now,
-            if statuses.is_empty() { "none".to_string() } else { statuses.join(", ") },
-            summary.deferred,
-            summary.clock_s / 3600.0,
-            common.out.display()
-        );
+        eprintln!("{summary}; dataset in {}", common.out.display());
     }
-    let flagged: usize =
-        summary.statuses.iter().filter(|(s, _)| ["failed", "dropout", "overrange"].contains(s)).map(|(_, n)| n).sum();
-    run::exit_if_flagged(flagged, "rows");
+    run::exit_if_flagged(summary.flagged_rows(), "rows");
     Ok(())
-}
-
-/// The `--protocol` help: every name of the excitation-protocol registry (`metaplate_dsp::excitation::NAMES`),
-/// with what it plays.
-pub fn protocol_help() -> String {
-    let names: Vec<String> = PROTOCOL_NAMES.iter().map(|(name, what)| format!("  {name}: {what}")).collect();
-    format!("Excitation protocol, one of:\n{}", names.join("\n"))
-}
-
-/// The scan plan over `plate`'s grid and mask, on the `subset` if given.
-pub fn plan(plate: &Plate, subset: Option<GridSubset>) -> anyhow::Result<ScanPlan> {
-    Ok(ScanPlan::new(plate.scene.grid, &plate.scene.grid_mask(), subset.map(Into::into))?)
 }

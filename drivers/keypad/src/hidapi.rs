@@ -13,7 +13,8 @@ const KEYBOARD_USAGE: (u16, u16) = (0x01, 0x06);
 /// Largest input report read at once, bytes (a boot report has 8; full-speed interrupt packets are at most 64).
 const MAX_REPORT_LEN: usize = 64;
 
-/// Which device to open.
+/// Which device to open. A hardware file writes it as `usb = "VID:PID[:SERIAL]"`, which the driver registry parses
+/// (`metaplate_drivers::UsbIds`, the one parser of USB ids).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct HidapiSelector {
     /// USB vendor ID.
@@ -22,20 +23,6 @@ pub struct HidapiSelector {
     pub product_id: u16,
     /// Serial number, when several identical pads are plugged in.
     pub serial: Option<String>,
-}
-
-impl std::str::FromStr for HidapiSelector {
-    type Err = TransportError;
-
-    /// Parses `VID:PID` or `VID:PID:SERIAL`, ids in hexadecimal (as `lsusb` prints them).
-    fn from_str(text: &str) -> Result<Self, TransportError> {
-        let bad = || TransportError::Unavailable(format!("{text:?} is not VID:PID[:SERIAL] with hexadecimal ids"));
-        let mut parts = text.splitn(3, ':');
-        let mut id = || parts.next().and_then(|part| u16::from_str_radix(part, 16).ok()).ok_or_else(bad);
-        let (vendor_id, product_id) = (id()?, id()?);
-        let serial = parts.next().map(str::to_string);
-        Ok(Self { vendor_id, product_id, serial })
-    }
 }
 
 /// An open HID device.

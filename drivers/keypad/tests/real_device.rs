@@ -16,7 +16,11 @@ use metaplate_keypad::{HidInput, HidapiInput, HidapiSelector, KeyAction, Keypad,
 #[ignore = "needs a real keypad: METAPLATE_KEYPAD=vid:pid cargo test -p metaplate-keypad --test real_device -- --ignored --nocapture"]
 fn a_real_keypad_reports_a_press_and_its_release() {
     let spec = std::env::var("METAPLATE_KEYPAD").expect("this test needs METAPLATE_KEYPAD=VID:PID[:SERIAL]");
-    let selector: HidapiSelector = spec.parse().unwrap();
+    // VID:PID[:SERIAL], hex ids (a hardware file's `keypad.usb`, which `metaplate_drivers::UsbIds` parses).
+    let mut parts = spec.splitn(3, ':');
+    let mut id = || u16::from_str_radix(parts.next().expect("VID:PID[:SERIAL]"), 16).expect("hex USB ids");
+    let (vendor_id, product_id) = (id(), id());
+    let selector = HidapiSelector { vendor_id, product_id, serial: parts.next().map(str::to_string) };
     let input = HidapiInput::open(selector).unwrap();
     eprintln!("opened {:?}; press and release one key within 10 s", input.describe());
     let mut pad = Keypad::new(input, Arc::new(RealClock::new()), ReportPrefix::None);
@@ -37,13 +41,9 @@ fn a_real_keypad_reports_a_press_and_its_release() {
 #[test]
 fn an_absent_device_is_a_typed_error() {
     // 0xFFFF:0xFFFF is no vendor's id; with or without HID devices on this machine, it is not found.
-    let selector: HidapiSelector = "ffff:ffff:none".parse().unwrap();
-    assert_eq!((selector.vendor_id, selector.product_id, selector.serial.as_deref()), (0xFFFF, 0xFFFF, Some("none")));
+    let selector = HidapiSelector { vendor_id: 0xFFFF, product_id: 0xFFFF, serial: Some("none".into()) };
     match HidapiInput::open(selector) {
         Err(error) => assert!(error.to_string().contains("ffff:ffff"), "{error}"),
         Ok(_) => panic!("opened a device that cannot exist"),
-    }
-    for bad in ["", "12", "zz:01", "1234:12345"] {
-        assert!(bad.parse::<HidapiSelector>().is_err(), "{bad:?}");
     }
 }

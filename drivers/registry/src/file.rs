@@ -48,6 +48,17 @@ pub enum HardwareError {
         /// The driver's error.
         detail: String,
     },
+    /// The scene the file names as its `plate` cannot be read, or is invalid.
+    #[error(transparent)]
+    Scene(#[from] metaplate_core::scene::SceneError),
+    /// The wiring does not fit the plate.
+    #[error("hardware file {}: {reason}", path.display())]
+    Plate {
+        /// The file.
+        path: PathBuf,
+        /// What does not fit.
+        reason: String,
+    },
 }
 
 /// `[ldv]`: the scanning vibrometer's controller.

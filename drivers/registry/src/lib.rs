@@ -53,6 +53,7 @@
 
 pub mod backends;
 mod file;
+pub mod listing;
 mod open;
 
 pub use backends::{BACKENDS, Backend, Capability, Found, ListError};
@@ -60,4 +61,5 @@ pub use file::{
     AlsaAudio, AudioSection, DaqSection, HardwareError, HardwareFile, HidrawKeypad, KeypadSection, LdvSection,
     NidaqmxDaq, SerialLdv, UsbBulkDaq, UsbIds, WiringSection,
 };
-pub use open::{OpenedRig, open_rig};
+pub use listing::{Listing, draft_hardware_file, list_connected, listings_json, listings_text};
+pub use open::{OpenedRig, open_plate_rig, open_rig};

@@ -1,9 +1,11 @@
 //! Opening the rig a hardware file names, each instrument through its backend.
 
+use std::path::Path;
 use std::sync::Arc;
 
 use metaplate_core::clock::{Clock, RealClock};
 use metaplate_core::rig::Rig;
+use metaplate_core::scene::Scene;
 use metaplate_keypad::{HidInput, Keypad};
 
 use crate::backends::{self, Capability};
@@ -22,6 +24,29 @@ impl std::fmt::Debug for OpenedRig {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("OpenedRig").field("keypad", &self.keypad.is_some()).finish_non_exhaustive()
     }
+}
+
+/// The plate the hardware file at `path` names (its scene, validated) and the rig and keypad it opens
+/// ([`open_rig`]): the wiring must name one channel per actuator of the plate, which is checked before anything
+/// is opened.
+///
+/// # Errors
+/// [`HardwareError::File`] and the others of [`open_rig`]; [`HardwareError::Scene`] for the plate's scene;
+/// [`HardwareError::Plate`] when the wiring does not fit it.
+pub fn open_plate_rig(path: &Path) -> Result<(Scene, OpenedRig), HardwareError> {
+    let file = HardwareFile::load(path)?;
+    let scene = Scene::resolve(&file.plate)?;
+    scene.validate()?;
+    let actuators = file.wiring.actuator_channels.len();
+    if actuators != scene.actuators.len() {
+        let reason = format!(
+            "wiring.actuator_channels lists {actuators} actuators, the plate `{}` has {}",
+            file.plate,
+            scene.actuators.len()
+        );
+        return Err(HardwareError::Plate { path: path.to_path_buf(), reason });
+    }
+    Ok((scene, open_rig(&file)?))
 }
 
 /// Opens every instrument `file` names, in the order LDV, DAQ, audio interface (configured once at the file's

@@ -118,3 +118,53 @@ fn a_backend_missing_from_this_build_is_named() {
         other => panic!("{:?}", other.map(|_| ())),
     }
 }
+
+/// The example with `edit` applied, written in a temporary directory.
+fn edited(edit: impl Fn(String) -> String) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("hardware.toml");
+    std::fs::write(&path, edit(EXAMPLE.to_string())).unwrap();
+    (dir, path)
+}
+
+#[test]
+fn the_examples_wiring_fits_its_plate() {
+    let file = parse(EXAMPLE).unwrap();
+    assert_eq!(file.plate, "metamaterial");
+    let wiring = file.wiring();
+    assert_eq!(wiring.actuator_channels, (0..8).collect::<Vec<u32>>());
+    assert_eq!((wiring.loopback_channel, wiring.audio_channels), (8, 10));
+}
+
+#[test]
+#[cfg(feature = "serial")]
+fn a_missing_serial_port_is_named_in_the_error() {
+    let missing = "/dev/metaplate-no-such-port";
+    let (_dir, path) = edited(|text| {
+        let start = text.find("port = ").unwrap();
+        let end = start + text[start..].find('\n').unwrap();
+        format!("{}port = \"{missing}\"{}", &text[..start], &text[end..])
+    });
+    let error = metaplate_drivers::open_plate_rig(&path).err().unwrap();
+    assert!(matches!(error, HardwareError::Device { device: "LDV", .. }), "{error:?}");
+    let message = error.to_string();
+    assert!(message.contains("LDV") && message.contains(missing), "{message}");
+}
+
+#[test]
+fn a_wiring_that_does_not_fit_the_plate_is_refused_before_opening_anything() {
+    let (_dir, path) = edited(|text| text.replace("[0, 1, 2, 3, 4, 5, 6, 7]", "[0, 1, 2, 3, 4, 5, 6]"));
+    let error = metaplate_drivers::open_plate_rig(&path).err().unwrap();
+    let message = error.to_string();
+    assert!(message.contains("lists 7 actuators") && message.contains("has 8"), "{message}");
+}
+
+#[test]
+fn usb_ids_parse_in_one_place() {
+    let ids = metaplate_drivers::UsbIds::parse("ffff:ffff:none").unwrap();
+    assert_eq!((ids.vendor_id, ids.product_id, ids.serial.as_deref()), (0xFFFF, 0xFFFF, Some("none")));
+    assert_eq!(metaplate_drivers::UsbIds::parse("046d:c31c").unwrap().serial, None);
+    for bad in ["", "12", "zz:01", "1234:12345", "1234:5678:"] {
+        assert!(metaplate_drivers::UsbIds::parse(bad).is_err(), "{bad:?}");
+    }
+}

@@ -18,10 +18,11 @@ use std::io::Write;
 use metaplate_audio::{PcmError, PcmParams, PcmSink, PcmStatus};
 use metaplate_cassette::{Body, Cassette, DeviceKind, Event, MAX_PAYLOAD_LEN, Record, Samples, StreamBlock};
 
-use crate::engine::{Deviation, Mismatch, ReplayStats, first_difference};
+use crate::engine::{ReplayStats, first_difference};
 use crate::failure::Failure;
 use crate::faults::{FaultKind, ReplayFaults};
 use crate::load::{ReplayError, check_kind};
+use crate::mismatch::{Deviation, Mismatch};
 use crate::recorder::Recorder;
 use crate::script::{EP_CONTROL, EP_IN, EP_OUT};
 

@@ -7,10 +7,11 @@ use metaplate_cassette::{Body, Cassette, DeviceKind, Event};
 use metaplate_daq::{BulkTransport, TransportError};
 
 use crate::dialect::DaqDialect;
-use crate::engine::{ByteReplay, Mismatch, ReplayStats};
+use crate::engine::{ByteReplay, ReplayStats};
 use crate::failure::Failure;
 use crate::faults::ReplayFaults;
 use crate::load::ReplayError;
+use crate::mismatch::Mismatch;
 use crate::recorder::Recorder;
 use crate::script::{EP_CONTROL, EP_IN, EP_OUT};
 

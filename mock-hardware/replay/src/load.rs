@@ -4,7 +4,7 @@ use std::path::Path;
 
 use metaplate_cassette::{Cassette, CassetteError, DeviceKind};
 
-use crate::engine::Mismatch;
+use crate::mismatch::Mismatch;
 
 /// Why a replay could not start, or stopped.
 #[derive(Debug, thiserror::Error)]

@@ -21,10 +21,11 @@ use metaplate_core::audio::{AudioConfig, AudioOut};
 
 use crate::audio::{AudioStep, ReplaySink, audio_steps};
 use crate::bulk::{RecordingTransport, ReplayTransport};
-use crate::engine::{Mismatch, ReplayStats};
+use crate::engine::ReplayStats;
 use crate::faults::ReplayFaults;
 use crate::line::{RecordingLine, ReplayLine};
 use crate::load::ReplayError;
+use crate::mismatch::Mismatch;
 use crate::recorder::{RecordError, Recorder};
 use crate::script::{Step, byte_steps};
 

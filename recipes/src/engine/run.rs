@@ -56,8 +56,8 @@ pub fn run<P: Plan>(
     let mut meta = plan.meta(out);
     let rig_record = rig_config(rig)?;
     if let Some(report) = &out.preflight {
-        let record = crate::preflight::manifest_record(report, &rig_record);
-        meta.config.insert(crate::preflight::PREFLIGHT_KEY.into(), record);
+        let record = crate::output::manifest_record(report, &rig_record);
+        meta.config.insert(crate::output::PREFLIGHT_KEY.into(), record);
     }
     meta.config.insert("rig".into(), rig_record);
     let mut run = Run::open(out, meta, rig.clock.clone(), control)?;
@@ -176,6 +176,8 @@ struct Run {
     commits: usize,
     clock: Arc<dyn Clock>,
     t0_s: f64,
+    /// Whether an earlier run was continued.
+    resumed: bool,
 }
 
 impl Run {
@@ -188,7 +190,9 @@ impl Run {
         let restored =
             opened.report.as_ref().and_then(|r| r.state.as_ref()).map(SessionState::from_json).transpose()?;
         let t0_s = clock.now_s();
+        let resumed = opened.report.is_some();
         Ok(Self {
+            resumed,
             writer: opened.writer,
             committed_keys: opened.committed,
             restored,
@@ -225,6 +229,7 @@ impl Run {
             done,
             dataset: self.writer.dir().to_path_buf(),
             config_hash: self.writer.manifest().config_hash.clone(),
+            resumed: self.resumed,
         });
     }
 

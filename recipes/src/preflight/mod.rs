@@ -31,7 +31,10 @@
 //! site per wired actuator) and DAQ and audio rates within a factor 2 of each other (as every recipe needs).
 
 mod bench;
+mod chirps;
+mod keypad;
 mod reciprocity;
+mod signals;
 
 use std::fmt::Write as _;
 
@@ -41,6 +44,7 @@ use serde_json::{Value, json};
 
 use crate::engine::aim::AimPolicy;
 use crate::error::RecipeError;
+pub use keypad::keypad_check;
 
 /// The loopback's level may differ from the wiring's prediction by this much, dB, before the check fails: more
 /// means a wrong `loopback_volts_per_full_scale` (every response's scale would be off by as much) or a wrong cable.
@@ -59,29 +63,6 @@ pub const MIN_PEAK_FRACTION: f64 = 1e-3;
 
 /// Disk space a run needs beyond its estimated size, as a factor (the journal, the log, a compaction's copy).
 pub const DISK_MARGIN: f64 = 1.25;
-
-/// The configuration key under which a run records its pre-flight.
-pub const PREFLIGHT_KEY: &str = "preflight";
-
-/// What a dataset records of the pre-flight `report` (a document `metaplate check --report` wrote: `verdict`,
-/// `checks`, `checked_at`, `software_version`, `rig`): the verdict, when, the failed checks' names, and whether
-/// the rig checked is the rig of the run (`rig_record`, identities and wiring, as
-/// [`crate::rig_config`] gives it), so a verdict from another rig or cabling reads as such.
-pub fn manifest_record(report: &Value, rig_record: &Value) -> Value {
-    let failed: Vec<&str> = report["checks"]
-        .as_array()
-        .map(|checks| {
-            checks.iter().filter(|c| c["passed"] != Value::Bool(true)).filter_map(|c| c["name"].as_str()).collect()
-        })
-        .unwrap_or_default();
-    json!({
-        "verdict": report["verdict"].as_str().unwrap_or("unknown"),
-        "checked_at": report["checked_at"],
-        "software_version": report["software_version"],
-        "failed": failed,
-        "same_rig": report.get("rig") == Some(rig_record),
-    })
-}
 
 /// What the check needs to know of the plate and of the planned run.
 #[derive(Debug, Clone, PartialEq)]
@@ -207,6 +188,21 @@ impl PreflightReport {
     /// The report as JSON: `{"verdict", "checks": [...]}`.
     pub fn to_json(&self) -> Value {
         json!({"verdict": self.verdict(), "checks": self.checks.iter().map(CheckOutcome::to_json).collect::<Vec<_>>()})
+    }
+
+    /// The report as `metaplate check` prints and writes it: [`PreflightReport::to_json`] with when it was checked
+    /// (`checked_at`, RFC 3339), the plate (`{"name", "hash"}`), the software's version and the rig's identities and
+    /// wiring (`rig`, as [`crate::rig_config`] gives it, or `{"error"}` saying why it could not be read).
+    pub fn document(&self, plate: &metaplate_store::SceneId, software_version: &str, rig: &mut Rig) -> Value {
+        let mut document = self.to_json();
+        if let Some(object) = document.as_object_mut() {
+            object.insert("checked_at".into(), json!(chrono::Utc::now().to_rfc3339()));
+            object.insert("plate".into(), json!({"name": plate.name, "hash": plate.hash}));
+            object.insert("software_version".into(), json!(software_version));
+            let rig = crate::rig_config(rig).unwrap_or_else(|e| json!({"error": e.to_string()}));
+            object.insert("rig".into(), rig);
+        }
+        document
     }
 }
 
@@ -424,20 +420,6 @@ mod tests {
         assert_eq!(report.verdict(), "fail");
         assert_eq!(report.verdict_line(), "fail: loopback (1 of 2 passed)");
         assert_eq!(report.to_json()["checks"][1]["passed"], false);
-    }
-
-    #[test]
-    fn the_manifest_records_the_verdict_the_failures_and_whether_the_rig_is_the_same() {
-        let rig = json!({"wiring": {"actuator_channels": [0, 1]}});
-        let report = json!({"verdict": "fail", "checked_at": "2026-11-25T01:00:00Z", "software_version": "0.1.0",
-            "checks": [{"name": "wiring", "passed": true}, {"name": "loopback", "passed": false}], "rig": rig});
-        let record = manifest_record(&report, &rig);
-        assert_eq!(record["verdict"], "fail");
-        assert_eq!(record["failed"], json!(["loopback"]));
-        assert_eq!(record["same_rig"], true);
-        let recabled = json!({"wiring": {"actuator_channels": [1, 0]}});
-        assert_eq!(manifest_record(&report, &recabled)["same_rig"], false);
-        assert_eq!(manifest_record(&json!({}), &rig)["verdict"], "unknown");
     }
 
     #[test]

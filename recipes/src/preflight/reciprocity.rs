@@ -2,7 +2,7 @@
 //! equals the one from `b` to `a` up to the two coils' gains, and a swap of two cables breaks that in a way that
 //! names the pair (see the pre-flight's `actuator_wiring` check).
 
-use super::bench::db_ratio;
+use super::signals::db_ratio;
 
 /// A pair's responses must agree to this, dB (error energy over the response's, after the best gain): a passive
 /// plate's are reciprocal, so what is left is the coils' gain spread (fitted away), noise and the coils' small

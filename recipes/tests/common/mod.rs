@@ -9,7 +9,7 @@ use metaplate_core::scene::Scene;
 use metaplate_dsp::excitation::ExcitationProtocol;
 use metaplate_dsp::kirkeby::KirkebyFilter;
 use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::scan::{ScanConfig, ScanPlan, ScanSummary, scan};
+use metaplate_recipes::scan::{ScanConfig, ScanPoints, ScanSummary, scan};
 use metaplate_recipes::{Event, Observer, Output, RecipeError, RunControl};
 use metaplate_store::Dataset;
 
@@ -24,8 +24,8 @@ pub fn metamaterial() -> Scene {
 /// The `nx` x `ny` plan of `scene` and a lab preparing its points and the actuators' driving points (for
 /// calibration on the magnets), Green's functions cached under the target directory (shared by test runs and
 /// files: the plate model's cost is per scene, so the tests share the 7 x 5 plan's lab and scan prefixes of it).
-pub fn lab_and_plan(scene: &Scene, nx: usize, ny: usize) -> (MockLab, ScanPlan) {
-    let plan = ScanPlan::new(scene.grid, &scene.grid_mask(), Some((nx, ny))).unwrap();
+pub fn lab_and_plan(scene: &Scene, nx: usize, ny: usize) -> (MockLab, ScanPoints) {
+    let plan = ScanPoints::new(scene.grid, &scene.grid_mask(), Some((nx, ny))).unwrap();
     let grid_len = scene.grid.len();
     let mut points = plan.points.clone();
     points.extend((0..scene.actuators.len()).map(|k| grid_len + k));
@@ -48,20 +48,20 @@ pub fn output(dir: &Path, scene: &Scene, resume: bool) -> Output {
 }
 
 /// The first `n` points of `plan` (in its order).
-pub fn prefix(plan: &ScanPlan, n: usize) -> ScanPlan {
-    ScanPlan { grid: plan.grid, points: plan.points[..n].to_vec() }
+pub fn prefix(plan: &ScanPoints, n: usize) -> ScanPoints {
+    ScanPoints { grid: plan.grid, points: plan.points[..n].to_vec() }
 }
 
 /// The first `n` points of the built-in scene's 7 x 5 plan.
-pub fn small_plan(n: usize) -> ScanPlan {
+pub fn small_plan(n: usize) -> ScanPoints {
     let scene = metamaterial();
-    prefix(&ScanPlan::new(scene.grid, &scene.grid_mask(), Some((7, 5))).unwrap(), n)
+    prefix(&ScanPoints::new(scene.grid, &scene.grid_mask(), Some((7, 5))).unwrap(), n)
 }
 
 /// One scan run of `plan` on a fresh lab of the built-in scene (a restarted program: new devices, a clock from
 /// 0), uncalibrated, with [`quick_config`].
 pub fn run_scan(
-    plan: &ScanPlan,
+    plan: &ScanPoints,
     out: &Output,
     control: &RunControl,
     observer: &mut dyn Observer,
@@ -71,7 +71,7 @@ pub fn run_scan(
 
 /// As [`run_scan`] with `cfg`.
 pub fn run_scan_with(
-    plan: &ScanPlan,
+    plan: &ScanPoints,
     cfg: &ScanConfig,
     out: &Output,
     control: &RunControl,

@@ -178,6 +178,24 @@ pub struct ActuatorCalibration {
     pub status: Status,
 }
 
+impl std::fmt::Display for ActuatorCalibration {
+    /// One line: `actuator 3: valid (flat within 1.20 dB; 1.50 dB on pyfar's standard smoothing; 1 attempt(s), boost
+    /// 12.0 dB)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "actuator {}: {} (flat within {:.2} dB; {:.2} dB on pyfar's standard smoothing; {} attempt(s), boost \
+             {:.1} dB)",
+            self.actuator,
+            self.status.as_str(),
+            self.flatness.deviation_db(),
+            self.standard_flatness.deviation_db(),
+            self.attempts,
+            self.filter.max_boost_db
+        )
+    }
+}
+
 /// The grid column a calibration row of `kind` is written in.
 fn kind_ix(kind: RowKind) -> u32 {
     match kind {

@@ -16,12 +16,13 @@ use crate::engine::plan::Lab;
 use crate::engine::session::Instruments;
 use crate::error::RecipeError;
 use crate::plans::calibrate::Calibration;
-use crate::plans::scan::GridScan;
+use crate::plans::scan::ScanPlan;
+use crate::plans::scan::gates::{gated, in_units};
 use crate::plans::scan::points::{Outcome, Problem};
-use crate::plans::scan::processing::{Channel, Job, ScanProcessor, Work, gated, in_units};
+use crate::plans::scan::processing::{Channel, Job, ScanProcessor, Work};
 use crate::plans::scan::simultaneous::{Averager, Simultaneous};
 
-impl GridScan<'_> {
+impl ScanPlan<'_> {
     /// Records every actuator still to measure at `point` (`pending`; the beam already at `aimed`); `None` if
     /// abandoned on request.
     pub(super) fn record_point(

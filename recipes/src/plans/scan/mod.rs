@@ -12,17 +12,19 @@
 //! saying what went wrong. No point is dropped.
 //!
 //! Sub-modules: [`points`] (the plan's state: what a result means for a point), `acquisition` (recording a point),
-//! `processing` (the worker thread's deconvolution and gates), `simultaneous` (Hadamard, interleaved, adaptive).
+//! `processing` (the worker thread's deconvolution), `gates` (SNR and drift), `simultaneous` (Hadamard, interleaved, adaptive).
 
 mod acquisition;
+mod gates;
 pub(crate) mod points;
 mod processing;
 mod simultaneous;
 
 use std::collections::{BTreeMap, BTreeSet, VecDeque};
 
-use metaplate_core::grid::GridSpec;
+use metaplate_core::grid::{GridSpec, GridSubset};
 use metaplate_core::rig::Rig;
+use metaplate_core::scene::Scene;
 use metaplate_dsp::deconv::DeconvConfig;
 use metaplate_dsp::excitation::{AdaptiveTarget, ExcitationProtocol, Scheme};
 use metaplate_dsp::stats::median;
@@ -42,8 +44,9 @@ use crate::events::{Observer, RunControl};
 use crate::output::Output;
 use crate::plans::calibrate::Calibration;
 use acquisition::{ExtraShots, build_playbacks};
+use gates::Gates;
 use points::{PointBook, Settled, point_records, severity};
-use processing::{Gates, Job, Processed, ScanProcessor};
+use processing::{Job, Processed, ScanProcessor};
 use simultaneous::Simultaneous;
 
 /// Recipe name in the manifest.
@@ -89,16 +92,17 @@ impl Default for ScanConfig {
     }
 }
 
-/// Where a scan goes: the grid and the points to visit, in path order.
+/// Where a scan goes: the grid and the points to visit, in path order (what [`scan`] measures; the plan that
+/// measures them, like the calibration's, is internal).
 #[derive(Debug, Clone, PartialEq)]
-pub struct ScanPlan {
+pub struct ScanPoints {
     /// The grid (point indices refer to it).
     pub grid: GridSpec,
     /// Flat indices to measure, in the order visited (serpentine).
     pub points: Vec<usize>,
 }
 
-impl ScanPlan {
+impl ScanPoints {
     /// The measurable points of `grid` (`mask[i]` true), or of its evenly spread `subset` (nx, ny), in serpentine
     /// order.
     ///
@@ -118,12 +122,29 @@ impl ScanPlan {
         }
         Ok(Self { grid, points: grid.serpentine_order(&measurable) })
     }
+
+    /// The measurable points of `scene` (its grid and mask), or of its evenly spread `subset` (`--grid NXxNY`).
+    ///
+    /// # Errors
+    /// As [`ScanPoints::new`].
+    pub fn of_scene(scene: &Scene, subset: Option<GridSubset>) -> Result<Self, RecipeError> {
+        Self::new(scene.grid, &scene.grid_mask(), subset.map(Into::into))
+    }
+
+    /// `n` points spread along the path (at 1/(n+1), 2/(n+1), ... of it), without repeats.
+    pub fn spread(&self, n: usize) -> Vec<usize> {
+        let len = self.points.len();
+        let mut points: Vec<usize> =
+            (1..=n).filter_map(|k| self.points.get((k * len / (n + 1)).min(len.saturating_sub(1))).copied()).collect();
+        points.dedup();
+        points
+    }
 }
 
 impl ScanConfig {
     /// The configuration as stored in the manifest: everything that changes the result, with the plan and the
     /// calibration's hash, so that a resume refuses a changed one.
-    pub fn to_json(&self, plan: &ScanPlan, calibration_hash: Option<&str>) -> Map<String, Value> {
+    pub fn to_json(&self, plan: &ScanPoints, calibration_hash: Option<&str>) -> Map<String, Value> {
         let p = &self.protocol;
         let s = &p.sweep;
         let d = &p.deconv;
@@ -178,6 +199,30 @@ pub struct ScanSummary {
     pub commit_s: f64,
 }
 
+impl ScanSummary {
+    /// Rows committed by this run that need a look: failed, dropout or overrange.
+    pub fn flagged_rows(&self) -> usize {
+        self.statuses.iter().filter(|(s, _)| ["failed", "dropout", "overrange"].contains(s)).map(|(_, n)| n).sum()
+    }
+}
+
+impl std::fmt::Display for ScanSummary {
+    /// One line: `6 of 6 points committed (6 now: rows 48 valid; 0 deferred), 0.05 h on the rig's clock`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let statuses: Vec<String> = self.statuses.iter().map(|(s, n)| format!("{n} {s}")).collect();
+        write!(
+            f,
+            "{} of {} points committed ({} now: rows {}; {} deferred), {:.2} h on the rig's clock",
+            self.committed,
+            self.total,
+            self.committed_now,
+            if statuses.is_empty() { "none".to_string() } else { statuses.join(", ") },
+            self.deferred,
+            self.clock_s / 3600.0
+        )
+    }
+}
+
 /// Runs the scan of `plan` with the inverse filters of `calibration` (raw drive when `None`), into `out`.
 ///
 /// # Errors
@@ -185,7 +230,7 @@ pub struct ScanSummary {
 /// configuration errors as [`RecipeError`] says.
 pub fn scan(
     rig: &mut Rig,
-    plan: &ScanPlan,
+    plan: &ScanPoints,
     calibration: Option<&Calibration>,
     cfg: &ScanConfig,
     out: &Output,
@@ -208,14 +253,14 @@ pub fn scan(
         seed: cfg.seed,
         recovery: cfg.recovery,
     };
-    let mut grid_scan = GridScan::new(plan, calibration, cfg, actuators);
-    let report = run(&mut grid_scan, settings, rig, out, control, observer)?;
+    let mut scan_plan = ScanPlan::new(plan, calibration, cfg, actuators);
+    let report = run(&mut scan_plan, settings, rig, out, control, observer)?;
     Ok(ScanSummary {
         committed_now: report.committed_now,
         committed: report.committed,
         total: report.total,
-        statuses: grid_scan.statuses,
-        deferred: grid_scan.book.deferred_points,
+        statuses: scan_plan.statuses,
+        deferred: scan_plan.book.deferred_points,
         clock_s: report.clock_s,
         commit_s: report.commit_s,
     })
@@ -223,8 +268,9 @@ pub fn scan(
 
 /// The scan as a plan: the points still to visit, the book of what each point needs, and what the rig's
 /// configuration decided (playbacks, recording length).
-struct GridScan<'a> {
-    plan: &'a ScanPlan,
+struct ScanPlan<'a> {
+    /// The points, in path order.
+    path: &'a ScanPoints,
     calibration: Option<&'a Calibration>,
     cfg: &'a ScanConfig,
     actuators: usize,
@@ -243,10 +289,10 @@ struct GridScan<'a> {
     statuses: BTreeMap<&'static str, usize>,
 }
 
-impl<'a> GridScan<'a> {
-    fn new(plan: &'a ScanPlan, calibration: Option<&'a Calibration>, cfg: &'a ScanConfig, actuators: usize) -> Self {
+impl<'a> ScanPlan<'a> {
+    fn new(path: &'a ScanPoints, calibration: Option<&'a Calibration>, cfg: &'a ScanConfig, actuators: usize) -> Self {
         Self {
-            plan,
+            path,
             calibration,
             cfg,
             actuators,
@@ -264,22 +310,22 @@ impl<'a> GridScan<'a> {
     /// A visit of `point`: the beam on it (nudged elsewhere on a re-visit), its actuators still to measure.
     fn visit(&mut self, point: usize) -> Step<Vec<usize>> {
         let (visit, pending) = self.book.visit(point);
-        Step { unit: point, aim: Some(AimAt { position_m: self.plan.grid.position_m(point), visit }), detail: pending }
+        Step { unit: point, aim: Some(AimAt { position_m: self.path.grid.position_m(point), visit }), detail: pending }
     }
 }
 
-impl Plan for GridScan<'_> {
+impl Plan for ScanPlan<'_> {
     type Detail = Vec<usize>;
     type Processor = ScanProcessor;
 
     fn meta(&self, out: &Output) -> DatasetMeta {
         DatasetMeta::new(
             RECIPE,
-            self.cfg.to_json(self.plan, self.calibration.map(|c| c.content_hash.as_str())),
+            self.cfg.to_json(self.path, self.calibration.map(|c| c.content_hash.as_str())),
             out.scene.clone(),
             out.software_version.clone(),
             self.cfg.seed,
-            self.plan.grid,
+            self.path.grid,
         )
         .with_description(DatasetDescription {
             ir_unit: match self.calibration {
@@ -293,8 +339,8 @@ impl Plan for GridScan<'_> {
     fn start(&mut self, committed: &BTreeSet<(u32, u16)>) -> (usize, usize) {
         let actuators = self.actuators;
         let is_committed = |p: usize| (0..actuators).all(|a| committed.contains(&(p as u32, a as u16)));
-        self.main = self.plan.points.iter().copied().filter(|&p| !is_committed(p)).collect();
-        let total = self.plan.points.len();
+        self.main = self.path.points.iter().copied().filter(|&p| !is_committed(p)).collect();
+        let total = self.path.points.len();
         (total, total - self.main.len())
     }
 
@@ -327,7 +373,7 @@ impl Plan for GridScan<'_> {
 
     fn reference(&self) -> Option<ReferenceSpec> {
         Some(ReferenceSpec {
-            points: self.plan.points.clone(),
+            points: self.path.points.clone(),
             protocol: self.cfg.protocol.clone(),
             filters: self.calibration.map(|c| c.filters.clone()),
             limit_db: self.cfg.recovery.reference_limit_db,
@@ -366,7 +412,7 @@ impl Plan for GridScan<'_> {
         let Processed { point, aimed, outcomes } = processed;
         match self.book.settle(point, aimed, outcomes)? {
             Settled::Commit(rows) => {
-                let records = point_records(&self.plan.grid, point, rows, self.ir_len, self.fs, now_unix_us())?;
+                let records = point_records(&self.path.grid, point, rows, self.ir_len, self.fs, now_unix_us())?;
                 let mut worst = Status::Valid;
                 let mut snrs = Vec::new();
                 for (record, status) in &records {
@@ -404,9 +450,9 @@ mod tests {
     #[test]
     fn the_path_runs_ahead_of_results_and_deferred_points_wait_until_nothing_is_in_flight() {
         let grid = GridSpec { nx: 3, ny: 1, spacing_m: 0.01, origin_x_m: 0.0, origin_y_m: 0.0 };
-        let plan = ScanPlan { grid, points: vec![0, 1, 2] };
+        let plan = ScanPoints { grid, points: vec![0, 1, 2] };
         let cfg = ScanConfig::default();
-        let mut scan = GridScan::new(&plan, None, &cfg, 2);
+        let mut scan = ScanPlan::new(&plan, None, &cfg, 2);
         // What `setup` sets from the rig.
         scan.fs = 24_000.0;
         // Point 0 committed by an earlier run (both actuators); point 1 half committed is measured again whole.

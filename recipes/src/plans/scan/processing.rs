@@ -2,12 +2,12 @@
 //! protocol's decode) and the quality gates, into outcomes the plan settles.
 
 use metaplate_dsp::excitation::Decoder;
-use metaplate_dsp::pipeline::ChannelResult;
 
 use crate::engine::aim::Aimed;
 use crate::engine::plan::Processor;
 use crate::engine::session::Acquisition;
-use crate::plans::scan::points::{Measured, Outcome, Problem};
+use crate::plans::scan::gates::{Gates, gated, in_units};
+use crate::plans::scan::points::{Outcome, Problem};
 use crate::plans::scan::simultaneous::Simultaneous;
 
 /// One acquisition sent for processing.
@@ -41,13 +41,6 @@ pub(crate) struct Processed {
     pub aimed: Aimed,
     /// Per channel: actuator, the response when processing succeeded, problem if any.
     pub outcomes: Vec<Outcome>,
-}
-
-/// The scan's quality gates, and the loopback's volts per full scale (to convert responses to m/s per full scale).
-pub(crate) struct Gates {
-    pub min_snr_db: f64,
-    pub max_drift_ppm: f64,
-    pub volts_per_fs: f64,
 }
 
 /// The scan's processing, shared with the engine's worker thread: the protocol's decoder at the DAQ rate (adaptive
@@ -101,30 +94,4 @@ fn process_channels(channels: Vec<Channel>, decoder: &Decoder, gates: &Gates) ->
             }
         })
         .collect()
-}
-
-/// `r` with its response (and its noise) multiplied by `to_units`.
-pub(crate) fn in_units(mut r: ChannelResult, to_units: f64) -> ChannelResult {
-    r.ir.iter_mut().for_each(|v| *v *= to_units);
-    r.noise_energy = r.noise_energy.map(|e| e * to_units * to_units);
-    r
-}
-
-/// The outcome of `actuator`'s decoded response `r` (m/s per full scale, sampled at `sample_rate_hz`): the gates
-/// (drift, then SNR) decide its problem, unless an acquisition `problem` (clipping, a gap) explains it better. The
-/// response is kept even when a gate fails: it is committed if no later visit does better.
-pub(crate) fn gated(
-    actuator: usize,
-    r: ChannelResult,
-    problem: Option<Problem>,
-    gates: &Gates,
-    sample_rate_hz: f64,
-) -> Outcome {
-    let gate = if r.drift_ppm.abs() > gates.max_drift_ppm {
-        Some(Problem::Drift(r.drift_ppm))
-    } else {
-        r.snr_db.filter(|s| *s < gates.min_snr_db).map(Problem::LowSnr)
-    };
-    let error_db = r.estimated_error_db(sample_rate_hz);
-    (actuator, Some(Measured { ir: r.ir, snr_db: r.snr_db, error_db }), problem.or(gate))
 }

@@ -10,8 +10,8 @@ use crate::drive::SimultaneousPlayback;
 use crate::engine::session::{Acquisition, Instruments};
 use crate::error::RecipeError;
 use crate::plans::calibrate::Calibration;
+use crate::plans::scan::gates::{Gates, gated, in_units};
 use crate::plans::scan::points::{Outcome, Problem};
-use crate::plans::scan::processing::{Gates, gated, in_units};
 
 /// A simultaneous protocol ready to play and decode.
 pub(crate) struct Simultaneous {

@@ -1,0 +1,207 @@
+//! What is connected, per backend ([`list_connected`], what `metaplate devices` prints), and a hardware file
+//! drafted from it ([`draft_hardware_file`], `metaplate devices --write-hardware`).
+//!
+//! Nothing found is not an error: on a machine with none of the instruments every list is empty.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::backends::{BACKENDS, Backend, Capability, Found};
+use crate::file::{HardwareError, HardwareFile};
+
+/// One backend's listing.
+#[derive(Debug, Clone)]
+pub struct Listing {
+    /// The backend.
+    pub backend: &'static Backend,
+    /// What of it is connected.
+    pub found: Vec<Found>,
+    /// Why nothing could be listed: the build lacks the backend, or the system could not be asked.
+    pub problem: Option<String>,
+}
+
+/// Every backend's listing, in the table's order.
+pub fn list_connected() -> Vec<Listing> {
+    BACKENDS
+        .iter()
+        .map(|backend| match (backend.missing_reason(), backend.list()) {
+            (Some(reason), _) => Listing { backend, found: Vec::new(), problem: Some(reason) },
+            (None, Ok(found)) => Listing { backend, found, problem: None },
+            (None, Err(e)) => Listing { backend, found: Vec::new(), problem: Some(e.to_string()) },
+        })
+        .collect()
+}
+
+/// A listing as `devices --json` prints it (fields in alphabetical order, as the JSON always had them).
+#[derive(Debug, Clone, Serialize)]
+pub struct ListingJson {
+    /// The backend's name.
+    pub backend: &'static str,
+    /// What is connected.
+    pub found: Vec<FoundJson>,
+    /// Whether this build has the backend.
+    pub in_this_build: bool,
+    /// Why nothing could be listed.
+    pub problem: Option<String>,
+}
+
+/// A found device as `devices --json` prints it.
+#[derive(Debug, Clone, Serialize)]
+pub struct FoundJson {
+    /// What the system says it is.
+    pub description: String,
+    /// The hardware file's key.
+    pub key: &'static str,
+    /// Its value.
+    pub value: String,
+}
+
+/// The listings by capability section (`audio`, `daq`, `keypad`, `ldv`), as `devices --json` prints them.
+pub fn listings_json(listings: &[Listing]) -> BTreeMap<&'static str, Vec<ListingJson>> {
+    Capability::ALL
+        .iter()
+        .map(|&capability| {
+            let backends = listings
+                .iter()
+                .filter(|l| l.backend.capability == capability)
+                .map(|l| ListingJson {
+                    backend: l.backend.name,
+                    found: l
+                        .found
+                        .iter()
+                        .map(|f| FoundJson { description: f.description.clone(), key: f.key, value: f.value.clone() })
+                        .collect(),
+                    in_this_build: l.backend.available,
+                    problem: l.problem.clone(),
+                })
+                .collect();
+            (capability.section(), backends)
+        })
+        .collect()
+}
+
+/// The listings as lines a person reads: per backend a head line (found, none, or why not listed) and one line
+/// per device with its hardware-file key.
+pub fn listings_text(listings: &[Listing]) -> String {
+    let mut text = String::new();
+    for l in listings {
+        let head = format!("{} ({})", l.backend.capability.noun(), l.backend.name);
+        let _ = match (&l.problem, l.found.len()) {
+            (Some(problem), _) => writeln!(text, "{head}: not listed: {problem}"),
+            (None, 0) => writeln!(text, "{head}: none found"),
+            (None, n) => writeln!(text, "{head}: {n} found"),
+        };
+        for f in &l.found {
+            let _ = writeln!(text, "  {} = \"{}\"    {}", f.key, f.value, f.description);
+        }
+    }
+    text
+}
+
+/// The hardware file's line for `key`: the first value found, the others as comment lines; or `placeholder` with a
+/// CHOOSE comment.
+fn choose(listings: &[Listing], key: &str, placeholder: &str, what: &str) -> String {
+    let found: Vec<&Found> = listings.iter().flat_map(|l| &l.found).filter(|f| f.key == key).collect();
+    let field = key.split('.').nth(1).unwrap_or(key);
+    match found.split_first() {
+        None => format!("{field} = \"{placeholder}\"   # CHOOSE: no {what} was found; put its name here\n"),
+        Some((first, rest)) => {
+            let verdict = if rest.is_empty() { "CHECK: the only one found" } else { "CHOOSE: the first of these" };
+            let mut text = format!("{field} = \"{}\"   # {verdict}{}\n", first.value, described(first));
+            for other in rest {
+                let _ = writeln!(text, "# {field} = \"{}\"   # or this one{}", other.value, described(other));
+            }
+            text
+        }
+    }
+}
+
+/// ": description", or nothing when the system describes it not.
+fn described(found: &Found) -> String {
+    if found.description.is_empty() { String::new() } else { format!(": {}", found.description) }
+}
+
+/// A hardware file drafted from `listings`, with a comment on every line where the choice is the user's (CHOOSE,
+/// CHECK); it parses as a hardware file (checked, naming `path` in errors).
+///
+/// # Errors
+/// [`HardwareError`] if the draft does not parse (a bug).
+pub fn draft_hardware_file(listings: &[Listing], path: &Path) -> Result<String, HardwareError> {
+    let mut text = String::from(
+        "# A hardware file drafted by `metaplate devices --write-hardware` from what was connected. Lines marked\n\
+         # CHOOSE need your decision; the format is documented in `cli/hardware.example.toml` and the\n\
+         # metaplate-drivers crate.\n\n\
+         plate = \"metamaterial\"   # CHOOSE: the scene describing your plate (built-in name or scene file)\n\n\
+         [ldv]\nbackend = \"serial\"\n",
+    );
+    text.push_str(&choose(listings, "ldv.port", "/dev/ttyUSB0", "serial port"));
+    text.push_str("baud = 115200\n\n[daq]\n");
+    let nidaqmx = listings.iter().any(|l| l.found.iter().any(|f| f.key == "daq.device"));
+    if nidaqmx {
+        text.push_str("backend = \"nidaqmx\"   # CHOOSE: or \"usb-bulk\" with usb = \"VID:PID:SERIAL\"\n");
+        text.push_str(&choose(listings, "daq.device", "Dev1", "NI-DAQmx device"));
+    } else {
+        text.push_str("backend = \"usb-bulk\"   # CHOOSE: or \"nidaqmx\" with device = \"Dev1\"\n");
+        text.push_str(&choose(listings, "daq.usb", "1209:0001:SN0001", "USB device with a serial number"));
+    }
+    text.push_str("\n[audio]\nbackend = \"alsa\"\n");
+    text.push_str(&choose(listings, "audio.device", "hw:CARD=24Ao,DEV=0", "ALSA playback PCM"));
+    text.push_str(
+        "sample_rate_hz = 48000.0   # CHECK: a rate the interface runs at exactly\n\
+         channels = 9               # CHECK: at least the 8 actuators and the loopback\n\n",
+    );
+    let keypads: Vec<&Found> = listings.iter().flat_map(|l| &l.found).filter(|f| f.key == "keypad.usb").collect();
+    text.push_str(
+        "# Optional: the response keypad. CHOOSE: uncomment to use one.\n# [keypad]\n# backend = \"hidraw\"\n",
+    );
+    match keypads.first() {
+        Some(k) => {
+            let _ = writeln!(text, "# usb = \"{}\"   # found{}", k.value, described(k));
+        }
+        None => text.push_str("# usb = \"VID:PID\"   # no HID keyboard or keypad was found\n"),
+    }
+    text.push_str(
+        "\n[wiring]   # CHECK every line against the cabling\n\
+         actuator_channels = [0, 1, 2, 3, 4, 5, 6, 7]   # audio channel of each actuator, in the plate's order\n\
+         loopback_channel = 8                           # audio channel cabled back into the DAQ\n\
+         velocity_input = 0                             # DAQ input of the LDV's velocity output\n\
+         loopback_input = 1                             # DAQ input of the loopback\n\
+         daq_range_v = 10.0                             # DAQ input range, +/- V\n\
+         daq_sample_rate_hz = 24000.0\n\
+         loopback_volts_per_full_scale = 1.0            # V at the DAQ for a full-scale audio sample\n",
+    );
+    HardwareFile::parse(&text, path)?;
+    Ok(text)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)] // Tests may unwrap: a panic is the failure report.
+
+    use super::*;
+
+    #[test]
+    fn a_draft_from_nothing_parses_and_marks_every_choice() {
+        let listings: Vec<Listing> =
+            BACKENDS.iter().map(|backend| Listing { backend, found: Vec::new(), problem: None }).collect();
+        let text = draft_hardware_file(&listings, Path::new("draft.toml")).unwrap();
+        assert!(text.contains("port = \"/dev/ttyUSB0\"   # CHOOSE"), "{text}");
+        let json = serde_json::to_string(&listings_json(&listings)).unwrap();
+        assert!(json.starts_with("{\"audio\":[{\"backend\":\"alsa\",\"found\":[],\"in_this_build\":"), "{json}");
+    }
+
+    #[test]
+    fn found_devices_fill_the_draft_first_one_first() {
+        let found = |value: &str| Found { key: "ldv.port", value: value.into(), description: "FTDI".into() };
+        let mut listings: Vec<Listing> =
+            BACKENDS.iter().map(|backend| Listing { backend, found: Vec::new(), problem: None }).collect();
+        listings[0].found = vec![found("/dev/ttyUSB1"), found("/dev/ttyUSB2")];
+        let text = draft_hardware_file(&listings, Path::new("draft.toml")).unwrap();
+        assert!(text.contains("port = \"/dev/ttyUSB1\"   # CHOOSE: the first of these: FTDI"), "{text}");
+        assert!(text.contains("# port = \"/dev/ttyUSB2\"   # or this one"), "{text}");
+        assert!(listings_text(&listings).contains("2 found\n  ldv.port = \"/dev/ttyUSB1\""));
+    }
+}
