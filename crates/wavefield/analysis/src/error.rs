@@ -78,7 +78,44 @@ pub enum AnalysisError {
         /// Which computation.
         what: &'static str,
     },
+    /// A dataset could not be opened (the store's reason, its causes after colons).
+    #[error("opening dataset {}: {reason}", path.display())]
+    Dataset {
+        /// The dataset's directory.
+        path: std::path::PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// A step of a dataset's analysis failed in a lower crate (control: the point selection, G(omega)).
+    #[error("{step}: {reason}")]
+    Step {
+        /// What was being done.
+        step: &'static str,
+        /// Why (the lower crate's error, its causes after colons).
+        reason: String,
+    },
+    /// A figure could not be drawn or written.
+    #[error("figure {name}: {reason}")]
+    Figure {
+        /// The figure's file stem.
+        name: &'static str,
+        /// Why (the figures crate's error, its causes after colons).
+        reason: String,
+    },
     /// A shared signal-processing helper refused its input.
     #[error(transparent)]
     Dsp(#[from] DspError),
+}
+
+/// An error and its causes, after colons (as the binary prints a failure), for the variants that keep a lower
+/// crate's error as text (this type is `Clone` and `PartialEq`; theirs are not).
+pub(crate) fn chain(error: &dyn std::error::Error) -> String {
+    let mut text = error.to_string();
+    let mut source = error.source();
+    while let Some(cause) = source {
+        text.push_str(": ");
+        text.push_str(&cause.to_string());
+        source = cause.source();
+    }
+    text
 }

@@ -10,18 +10,23 @@
 //! spacing of two focused pulses, with the closed-form single-pixel focusing of [`focus`]. [`response`]: the mean
 //! driven response. [`report`]: all of them on one plate. [`bands`]: the operating band. [`lattice`]: the regular
 //! lattice a (subset of) measured points lies on, on which every lattice-dependent analysis works, and the range of
-//! wavelengths it can resolve.
+//! wavelengths it can resolve. [`dataset_report`]: the whole analysis of a dataset on disk as `metaplate analyze`
+//! prints it (a typed, serialisable report), with its figures ([`dataset_figures`]); [`paper_table`]: the
+//! paper-against-suite table from typed results.
 //!
 //! Every public routine checks its input: an empty or mismatched input, a NaN or infinity, or a parameter outside the
 //! routine's stated valid range is an [`AnalysisError`], never a panic and never a NaN in the result.
 
 pub mod authority;
 pub mod bands;
+pub mod dataset_figures;
+pub mod dataset_report;
 pub mod dispersion;
 pub mod error;
 pub mod focus;
 pub mod lattice;
 mod linalg;
+pub mod paper_table;
 pub mod pixel;
 pub mod pod;
 pub mod refresh;

@@ -123,12 +123,22 @@ pub struct Member {
 pub enum Reach {
     /// Its fastest member is already within the tolerance of the target (the error is not set by the excitation
     /// time there): that member's time.
-    Fastest { time_per_point_s: f64 },
+    Fastest {
+        /// That member's time per point, s.
+        time_per_point_s: f64,
+    },
     /// Between members `lower` and `lower + 1`: the error interpolated linearly in log2 of excitation time (at
     /// the family's measured slope between them) reaches the target at `excitation_s`, and the time per point
     /// there is interpolated linearly in excitation time (a family's time per point is affine in it: a fixed
     /// ring-out and moves per shot and point).
-    Interpolated { lower: usize, excitation_s: f64, time_per_point_s: f64 },
+    Interpolated {
+        /// The member below the crossing (index into the family).
+        lower: usize,
+        /// Seconds of excitation per point at the crossing.
+        excitation_s: f64,
+        /// Time per point at the crossing, s.
+        time_per_point_s: f64,
+    },
     /// No member reaches the target (not even the slowest): no time can be given without extrapolating.
     NotReached,
 }
