@@ -94,16 +94,6 @@ fn pyuff_reads_every_variant_we_write() {
     let expected_path = dir.path().join("expected.json");
     std::fs::write(&expected_path, expected).unwrap();
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/read_uff.py");
-    let out = Command::new(python()).arg(script).arg(&uff).arg(&expected_path).output().unwrap();
+    let out = Command::new(metaplate_fixtures::python()).arg(script).arg(&uff).arg(&expected_path).output().unwrap();
     assert!(out.status.success(), "{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-}
-
-/// The interpreter with the cross-check packages: `$METAPLATE_PYTHON`, else the workspace's `.venv`.
-fn python() -> std::path::PathBuf {
-    if let Some(p) = std::env::var_os("METAPLATE_PYTHON") {
-        return p.into();
-    }
-    let venv = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
-    assert!(venv.exists(), "no {} and no METAPLATE_PYTHON: run scripts/install-deps.sh", venv.display());
-    venv
 }

@@ -55,7 +55,12 @@ fn polars_and_pyarrow_read_the_committed_files() {
     std::fs::write(&expected_path, expected.to_string()).unwrap();
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/read_dataset.py");
     let run = |what: &str| {
-        let out = Command::new(python()).arg(script).arg(dir.path()).arg(&expected_path).output().unwrap();
+        let out = Command::new(metaplate_fixtures::python())
+            .arg(script)
+            .arg(dir.path())
+            .arg(&expected_path)
+            .output()
+            .unwrap();
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(out.status.success(), "{what}: {stdout}{}", String::from_utf8_lossy(&out.stderr));
     };
@@ -97,19 +102,9 @@ fn the_readme_reading_example_runs() {
     );
     let script = dir.path().join("example.py");
     std::fs::write(&script, code + &checks).unwrap();
-    let out = Command::new(python()).arg(&script).output().unwrap();
+    let out = Command::new(metaplate_fixtures::python()).arg(&script).output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success() && stdout.contains("ok"), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
-}
-
-/// The interpreter with the cross-check packages: `$METAPLATE_PYTHON`, else the workspace's `.venv`.
-fn python() -> std::path::PathBuf {
-    if let Some(p) = std::env::var_os("METAPLATE_PYTHON") {
-        return p.into();
-    }
-    let venv = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../.venv/bin/python");
-    assert!(venv.exists(), "no {} and no METAPLATE_PYTHON: run scripts/install-deps.sh", venv.display());
-    venv
 }
 
 /// `Dataset::lazy` scans exactly the committed files, in the dataset's columns.
