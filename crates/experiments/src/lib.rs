@@ -1,23 +1,42 @@
 //! Behavioural experiments on the display: the paper's four (Results, "Multi-Pixel Wave Focusing"; Materials and
 //! Methods and Supplementary Methods, "Haptic Perception") and any other written as a file.
 //!
-//! - [`file`](mod@file): the experiment file (format below), parsed and validated with file, line, key and reason;
+//! - [`file`](mod@file): the experiment file (format below), parsed and validated through
+//!   `metaplate_core::toml_locate` with file, line, key and reason, as scene files are; [`Experiment::file_hash`],
+//!   FNV-1a over its canonical JSON (comments and formatting do not change it);
 //! - [`builtin`]: the paper's four, `pixel-identification`, `odd-one-out-exploration`, `motion-direction`,
-//!   `multi-touch-odd-one-out` (files in `experiments/builtin/`);
-//! - [`plan`]: the full trial plan from a file and a seed, and its hash;
-//! - [`journal`]: a session's directory: the stored plan and the append-only, fsync'd journal; resume;
-//! - [`participant`]: the simulated participant, a documented psychometric model of the predicted field;
-//! - [`stats`]: Wilson 95 % intervals, exact binomial p values against chance, confusion matrices;
+//!   `multi-touch-odd-one-out` (files in `crates/experiments/builtin/`; their pixels below);
+//! - [`plan`]: the full trial plan from a file and a seed (familiarisation, then conditions x repeats, fully
+//!   shuffled or blocked, drawn with `metaplate_core::rng::SplitMix64`), and its hash ([`Plan::hash`]);
+//! - [`journal`]: a session's directory: `plan.json` stored durably (the store's `write_bytes`) before the first
+//!   trial, and `journal.jsonl`, appended and fsync'd per entry; a correction, an undo or a void is a new line, a
+//!   torn last line is tolerated and cut, voided trials are re-queued at the end; a resume with a different plan or
+//!   file is refused unless forced;
+//! - [`participant`]: the simulated participant, a documented psychometric model of the predicted field (logistic
+//!   functions of the level above a vibrotactile threshold and of the target-to-others contrast, a lapse rate;
+//!   options as `sim:seed=3,lapse=0.05`);
+//! - [`masking`]: the masking noise, two independent pink noises (`metaplate_dsp::noise`), faded, at the file's
+//!   level;
+//! - [`stats`]: Wilson 95 % intervals, exact one-sided binomial p values against chance (with their log10),
+//!   confusion matrices;
 //! - [`lock`]: one writer per session; [`duplicates`]: trials a journal answers more than once; [`settle`]: a
 //!   correction that settles one;
-//! - [`stimulus`]: a stimulus rendered through the calibration and checked, ready to play (recipes' `play`);
-//! - [`runner`]: one participant's session on a rig (`experiment run`), answered by the simulated participant or
-//!   the experimenter's console (a trait; [`console`] reads the terminal and the keypad on threads);
-//! - [`report`]: the report of session directories (`experiment report`; its Parquet, [`trials_parquet`]);
-//!   [`listing`]: the built-ins as `experiment list` prints them;
-//! - [`stimuli`]: how well a scan renders experiments' stimuli (`experiment stimuli`).
+//! - [`stimulus`]: a stimulus rendered once through the calibration and checked, ready to play (recipes'
+//!   `play::prepare`, with the experiment's control `Waveform`s as focus targets delayed by one impulse-response
+//!   length);
+//! - [`runner`]: one participant's session on a rig (`experiment run`): the plan stored before the first trial,
+//!   each trial played, answered and journalled as it ends, answered by the simulated participant or the
+//!   experimenter's console (a trait; [`console`] reads the terminal and the keypad, through
+//!   `metaplate_keypad::Key::character`, on threads: a response key, `r` repeat, `u` undo, `v` void, `p` pause);
+//! - [`report`]: the report of session directories (`experiment report`: accuracy, Wilson 95 %, exact p,
+//!   confusion, trial times; its Parquet, [`trials_parquet`]); [`listing`]: the built-ins as `experiment list`
+//!   prints them;
+//! - [`stimuli`]: how well a scan renders experiments' stimuli (`experiment stimuli`: each pixel's predicted peak
+//!   at its point and within a fingertip's reach, and the suppression; the rig's wiring read back from the dataset
+//!   with `metaplate_recipes::recorded_wiring`).
 //!
-//! The rig itself is the caller's: the runner plays on the `Rig` it is handed.
+//! The rig itself is the caller's: the runner plays on the `Rig` it is handed. Nothing here links tokio or a real
+//! device backend (`.ci/run` checks both with `cargo tree`).
 //!
 //! # The experiment file
 //! TOML; SI units, the unit in each key's name (times in seconds, frequencies in hertz, positions in metres in the

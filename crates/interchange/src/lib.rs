@@ -1,13 +1,22 @@
 //! Datasets to and from other tools' files: a dataset exported as universal files (UFF 58/58b with 164 units and
 //! 2411 nodes) for modal-analysis tools ([`export()`]), and universal files written by other tools (or by
-//! [`export()`]) imported as a dataset through the store's writer ([`import()`]).
+//! [`export()`]) imported as a dataset through the store's writer ([`import()`]). The codec is `metaplate-uff`;
+//! the binary's `metaplate export` and `metaplate import` are thin calls of this crate.
 //!
 //! Both stream: an export reads one batch file at a time and an import holds one batch of rows, so a dataset of
 //! any size passes in bounded memory. Both report their progress to a callback ([`Progress`]), so that the caller
 //! draws it as it likes (the binary: a progress bar on stderr).
 //!
-//! The ID lines of an exported record ([`IdLines`]) carry what an import needs to rebuild the dataset exactly
-//! (key, grid, scene, row quality, source); a file without them (another tool's) is placed by its nodes.
+//! - [`export`](mod@export): what the file holds, in order (units, nodes, then one response per committed
+//!   (point, actuator), and with [`ExportOptions`] its frequency response too).
+//! - [`import`](mod@import): how the grid and keys, the sample rate (`metaplate_uff::sample_rate_from_step`), the
+//!   function and the units are found, and what is refused.
+//! - [`IdLines`]: the ID lines of an exported record, the one format export and import share: they carry what an
+//!   import needs to rebuild the dataset exactly (key, grid, scene, row quality, source); a file without them
+//!   (another tool's) is placed by its nodes (`metaplate_core::grid::snap_to_grid`).
+//!
+//! Every error is an [`InterchangeError`] saying what and where. The crate's tests round-trip a dataset through a
+//! universal file in every format, from FRFs alone and placed by the nodes alone, and check each refusal.
 
 mod convert;
 mod error;

@@ -29,8 +29,25 @@
 //! - `/api/point/N`: grid point N's committed rows (actuator, status, SNR, retries, time, impulse response) and its
 //!   worst status; 404 while it is not committed.
 //! - `/events`: server-sent events, one `commit` per journal commit with `id` its sequence number and data
-//!   `{seq, at, file, point (a calibration: actuator), rows, status, snr_db}`; `Last-Event-ID: N` replays the commits after N; a comment
-//!   every [`server::KEEP_ALIVE`] keeps an idle stream open.
+//!   `{seq, at, file, point (a calibration: actuator), rows, status, snr_db}`; `Last-Event-ID: N` replays the
+//!   commits after N; a comment every [`KEEP_ALIVE`] keeps an idle stream open.
+//!
+//! # How it reads and serves
+//!
+//! - [`follow`], on a thread of its own: the manifest; the journal through `metaplate_store::journal::view` when its
+//!   size or modification time changes; each newly committed file once, through
+//!   `metaplate_store::Dataset::read_batch`. Files are only opened for reading, with no lock; a torn last line, and
+//!   files quarantined under it, are tolerated and retried at the next poll ([`POLL_INTERVAL`]). The log's tail and
+//!   the free space (`metaplate_store::free_bytes`) are read there too, so a request never waits for the disk
+//!   (`/api/point/N` apart, which reads its point's file on a blocking task).
+//! - [`state`]: the `/api/state` snapshot and the commit events, from what the follower read; the per-point status
+//!   and SNR reduction and its fixed SNR scale are `metaplate_recipes::cells`, which the report's maps use too.
+//! - [`view`]: what the page draws and one point's rows. The page (`page.html`) is self-contained and carries the
+//!   view it was served with.
+//! - The server: axum on a current-thread tokio runtime, the Host and method guard ([`is_loopback_host`]), the
+//!   routes and the server-sent events.
+//! - [`notices`]: `--notify-command` for a run the monitor watches: once per change of the run's status to
+//!   finished, stopped, failed or stalled.
 
 pub mod follow;
 pub mod notices;

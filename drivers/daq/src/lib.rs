@@ -1,17 +1,21 @@
 //! DAQ drivers: the [`Daq`](metaplate_core::daq::Daq) capability on real and simulated hardware.
 //!
 //! - [`DaqDriver`]: metaplate's documented DAQ bulk protocol (`metaplate-daq-protocol`) over any
-//!   [`BulkTransport`]: command/reply matching by sequence number, timeouts with bounded retries, draining of
-//!   stale replies, stream integrity (lost packets, overruns, clipping), and reopen with the configuration
-//!   re-applied. The mock DAQ (`metaplate-mock-daq`) provides an in-process transport.
-//! - `UsbTransport` (feature `usb`): a real device on USB bulk endpoints through nusb.
+//!   [`BulkTransport`], the narrow transport trait this crate defines: command/reply matching by sequence number,
+//!   timeouts with bounded retries, draining of stale replies, stream integrity per block (lost packets, overruns,
+//!   clipping, through the protocol's `StreamTracker`), and reopen with the configuration re-applied. The mock DAQ
+//!   (`metaplate-mock-daq`) provides an in-process transport.
+//! - `UsbTransport` (feature `usb`): a real device on USB bulk endpoints through nusb. A reopen drops the old
+//!   handle before claiming the interface again ([`reopen_dropping_first`]).
 //! - `NiDaqmx` (feature `nidaqmx`): NI DAQs (the paper's USB-6211 speaks a proprietary protocol) through NI's
-//!   NI-DAQmx C library, loaded at run time.
+//!   NI-DAQmx C library, loaded at run time (libloading).
 //!
-//! Without features the crate holds the transport trait and the driver logic only (what the mock DAQ needs).
+//! Without features the crate holds the transport trait and the driver logic only (what the mock DAQ needs). Both
+//! features are on by default for this crate's own tests; the workspace depends on the crate without them, and the
+//! binary turns them on (through `metaplate-drivers`' `hardware` feature).
 //!
 //! Unsafe code: the workspace forbids it; this crate lowers that to `deny` in its `Cargo.toml` and allows it in
-//! the `nidaqmx` module only (foreign calls into NI-DAQmx).
+//! the `nidaqmx` module only (foreign calls into NI-DAQmx), the only unsafe code of the workspace's drivers.
 
 pub mod driver;
 #[cfg(feature = "nidaqmx")]

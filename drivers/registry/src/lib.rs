@@ -1,14 +1,37 @@
 //! The registry of metaplate's drivers, as probe-rs lists its probes: one table of backends per capability
-//! ([`backends::BACKENDS`]: name, what it needs, whether this build has it, what is connected), the hardware file
-//! that names one backend per instrument ([`HardwareFile`]), and opening the rig it names ([`open_rig`]).
+//! ([`backends::BACKENDS`]: name, what it needs, its cargo feature, whether this build has it, what is connected),
+//! the hardware file that names one backend per instrument ([`HardwareFile`]), and opening the rig it names
+//! ([`open_rig`]).
 //!
-//! Each real backend is a cargo feature (`serial`, `usb-bulk`, `nidaqmx`, `alsa`, `hidraw`; all of them:
-//! `hardware`). A build without one still parses a file naming it and says, when asked to open it, that this
-//! build lacks it ([`HardwareError::NotInThisBuild`]); `alsa` and `hidraw` exist on Linux only.
+//! - [`backends`]: [`Capability`] (`Vibrometer`, `Daq`, `Audio`, `Keypad`) and [`BACKENDS`]: `serial` (the LDV's
+//!   controller, serialport), `usb-bulk` (a DAQ speaking metaplate's USB bulk protocol, nusb), `nidaqmx` (an NI DAQ
+//!   through NI-DAQmx, loaded at run time), `alsa` (the audio interface) and `hidraw` (the response keypad), each
+//!   with what it needs, its feature, whether this build has it, and [`Backend::list`], the devices it can see.
+//! - [`HardwareFile`]: the hardware file (format below), parsed and checked. Errors ([`HardwareError`]) name the
+//!   file, the key and the reason, or the backend this build lacks and how to get it.
+//! - [`open_rig`]: the [`Rig`](metaplate_core::rig::Rig) a hardware file names, on the real clock, and the keypad
+//!   beside it ([`OpenedRig`]); [`open_plate_rig`] also reads the file's plate and checks the wiring against it.
+//! - [`listing`]: what is connected, per backend ([`list_connected`], what `metaplate devices` prints), and a
+//!   hardware file drafted from it ([`draft_hardware_file`]).
+//!
+//! # Drivers and features
+//!
+//! A driver is generic over a narrow transport trait (`SerialLine`, `BulkTransport`, `PcmSink`, `HidInput`) and
+//! implements a capability trait from `metaplate-core` (`Vibrometer`, `Daq`, `AudioOut`); the mock device
+//! implements the device side of the same protocol behind the same transport trait, so tests run the code the lab
+//! runs. Real backends are cargo features of the driver crates (`metaplate-ldv/serial`: serialport;
+//! `metaplate-daq/usb`: nusb; `metaplate-daq/nidaqmx`: libloading; `metaplate-audio/alsa` and
+//! `metaplate-keypad/hidraw`: Linux only), and this crate's features turn them on (`serial`, `usb-bulk`,
+//! `nidaqmx`, `alsa`, `hidraw`; all of them: `hardware`, the default here and in the binary). The workspace depends
+//! on the drivers without them, so the mock devices, the mock lab, the recipes and a `cargo build -p metaplate-cli
+//! --no-default-features` binary link none (`.ci/run` checks it with `cargo tree`). A build without a backend
+//! still parses a file naming it and says, when asked to open it, that this build lacks it
+//! ([`HardwareError::NotInThisBuild`]); elsewhere than Linux, `alsa` and `hidraw` are compiled out and the registry
+//! says so.
 //!
 //! # The hardware file (TOML)
-//! The one description of the format (`cli/hardware.example.toml` is an example of it). Unknown keys are refused (a
-//! typo must not fall back to a default); every instrument's section names its `backend`.
+//! The one description of the format (`crates/cli/hardware.example.toml` is an example of it). Unknown keys are
+//! refused (a typo must not fall back to a default); every instrument's section names its `backend`.
 //! ```toml
 //! # The plate under test: a scene (built-in name or scene file) whose outline, supports, measurement grid and
 //! # actuator positions describe the real plate; its simulation settings are ignored.

@@ -12,6 +12,10 @@
 //!
 //! What was physically played ([`Playback`]: true start time, true frame rate, samples with the gaps) is handed to
 //! a [`PlaybackObserver`] at `submit`: the mock lab turns it into actuator forces and loopback voltage.
+//!
+//! [`FaultWindows`] and [`DisconnectTracker`] are the scene's time-keyed faults as the mock lab consults them (is a
+//! fault of this kind active now; has a disconnect taken a device off its bus), for the audio interface and for the
+//! rest of its chain alike.
 
 mod windows;
 

@@ -52,8 +52,9 @@
 //! - per distinct drive buffer (hash of its samples; the same compensated sweep plays at every point), cached: the
 //!   force spectrum of each active actuator on a half-rate (24 kHz) grid of the audio clock, only the bins inside
 //!   the Green's functions' band; and the loopback decimated by 2 (an ideal low-pass at 12 kHz);
-//! - per playback: the Green's function spectrum at the beam's point (one FFT), the product with the force spectra, one inverse FFT on
-//!   the half-rate grid, and one interpolation of velocity and loopback onto the DAQ's sample times;
+//! - per playback: the Green's function spectrum at the beam's point (one FFT), the product with the force spectra,
+//!   one inverse FFT on the half-rate grid, and one interpolation of velocity and loopback onto the DAQ's sample
+//!   times;
 //! - per DAQ sample: copying, noise (a cheap counter-based approximately normal draw), dropouts, range, clipping.
 //!
 //! # Faults (from the scene's `faults`, in virtual time, deterministic under the seed)
@@ -74,6 +75,24 @@
 //! at another rate than the wiring asks for, so the audio driver refuses to open it. (`disk_free_bytes` is read by
 //! the binary, which owns the disk.)
 //!
+//! # The truth a measurement is compared with
+//! - [`MockLab::true_response`]: the small-signal linear chain at a prepared point (the voice coil's linear filter
+//!   times the plate's Green's function), at given frequencies; [`MockLab::response_error_db`]: a measured
+//!   response against it over [`ERROR_BAND_HZ`], by `metaplate_dsp::accuracy`'s measure ([`time_zero_first`] puts a
+//!   two-sided response's time 0 first); [`MockLab::true_velocity`]: what a set of drives does at a point, the truth
+//!   a stimulus is judged by.
+//! - [`windowed_truth`]: one row's truth on a stored window's DFT bins, from the Green's function's FFT on a grid
+//!   long enough that those bins are its own (no DTFT per bin): the full truth; the windowed truth, band-limited as
+//!   the deconvolution's `DeconvConfig::band` and cut to the window's `pre_samples` and `ir_len` (what a perfect
+//!   measurement of the window returns); and optionally the truth folded modulo a periodic excitation's period.
+//!   The truncation (windowed against full, from the truth alone) and the aliasing (folded against windowed) follow.
+//! - [`budget`]: the error budget's variants ([`budget::Budget::variants`]: the floor with every imperfection off,
+//!   each imperfection alone, all on), per-row errors against the full and the windowed (and folded) truth,
+//!   overall and per octave band, medians and 95th percentiles, the truncation and aliasing terms, whether the
+//!   terms add as powers, and whether each floor row splits into its windowed error plus the truncation
+//!   ([`budget::splits`]). The truth for a nonlinear actuator is its small-signal linear part. The scans of the
+//!   variants run above this crate (`metaplate-evaluation`).
+//!
 //! # Simplifications
 //! - The beam is read once per playback (at submit): moving it during a playback does not change that playback.
 //! - An aiming error (`ldv.aim_error_rms_m`) offsets the beam from each commanded point by a normal draw per point
@@ -83,8 +102,10 @@
 //!   and the shortest wavelength.
 //! - A DAQ acquisition records only the playbacks submitted during it: the ring-down of an earlier playback (the
 //!   previous unit's last sweep) is not carried into the next acquisition, and a random dropout's low `SIG?`
-//!   reading ends when the beam moves. So what a measurement yields depends on (scene, seed, what is played where)
-//!   alone, never on what the session measured before: a run resumed after a crash equals an uninterrupted one.
+//!   reading ends when the beam moves. Random draws (noise, dropouts) are keyed by what is measured (the spot, the
+//!   drive, and how often that drive has played there: the attempt), not by the session's history. So what a
+//!   measurement yields depends on (scene, seed, what is played where, its attempt) alone, never on what the
+//!   session measured before: a run resumed after a crash equals an uninterrupted one.
 //! - The Green's functions are sampled at the DAQ's nominal rate and applied on the audio clock's half-rate grid
 //!   (a frequency scaling of the plate by the audio clock's offset, 30 ppm: far below any modal bandwidth).
 //! - The loopback is ideally low-passed at 12 kHz (the real DAQ would alias content above; drive signals have none).

@@ -10,6 +10,10 @@
 //! - Served two ways: [`MockLine`], an in-process `SerialLine` for fast tests (timeouts cost no wall time), and
 //!   [`PtyServer`], a pseudo-terminal in raw mode served by a background thread (Unix only; elsewhere it refuses to
 //!   start), so that the real `SerialPortLine` transport (`metaplate-ldv`'s feature `serial`) is exercised.
+//!
+//! Like every mock device here, it implements the device side of the same protocol behind the same transport trait
+//! as the real instrument, so the real driver's code runs against it: in the driver's tests, and in the mock lab
+//! (`metaplate-lab`).
 
 mod controller;
 mod device;

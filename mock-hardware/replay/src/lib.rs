@@ -1,5 +1,5 @@
 //! Record and replay of device sessions: transports that write cassettes, and transports that play them back
-//! (with faults).
+//! (with faults), so that the real drivers run against a session recorded from a real or a mock device.
 //!
 //! # Recording
 //!
@@ -56,8 +56,11 @@
 //!
 //! # Sessions
 //!
-//! [`session`] re-runs a recorded LDV or DAQ session through its driver from the recorded commands alone (what
-//! `metaplate replay` does), and records short demo sessions against the mock devices.
+//! [`session`] re-runs a recorded LDV, DAQ or audio session through its real driver from the recorded commands
+//! alone ([`session::replay`], what `metaplate replay` does), and records short demo sessions against the mock
+//! devices. [`summary`] is what `metaplate replay` prints of it: a text summary ([`summary_text`]), the same as one
+//! JSON object ([`ReplaySummary`]), and a cassette's records one a line ([`list_text`]). A cassette is read from
+//! bytes or a file by [`load_bytes`] / [`load_file`].
 
 mod audio;
 mod bulk;

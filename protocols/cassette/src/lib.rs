@@ -90,6 +90,15 @@
 //! being buffered. Input that ends before the end marker gives [`CassetteError::Truncated`] after every good
 //! record; bytes after the end marker give one [`CassetteError::TrailingGarbage`]; an end marker whose record
 //! count differs from the good records read gives [`CassetteError::RecordCount`].
+//!
+//! # Tests
+//!
+//! Round trips of every record type through the encoder and a decoder fed at random split points (proptest), the
+//! example above and a richer session byte for byte (against bytes built independently with Python's `struct` and
+//! `zlib.crc32`), the encoder's refusals at the edges of every limit, and every class of malformed input with its typed
+//! error and recovery. The fuzz target `cassette_reader` in `fuzz/` feeds the decoder hostile bytes (it reseals
+//! checksums so that it explores past them); run it with `cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run cassette_reader
+//! -- -max_total_time=300` (`RUSTC_BOOTSTRAP` lets cargo-fuzz use its sanitizer flags on a stable toolchain).
 
 mod cassette;
 mod decode;

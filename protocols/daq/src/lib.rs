@@ -125,6 +125,17 @@
 //!
 //! The sequence numbers in frame headers are carried, not checked: matching replies to commands is the driver's job,
 //! and sample-packet losses are the [`StreamTracker`]'s.
+//!
+//! # Codec properties and tests
+//!
+//! Like every codec in `protocols/`, this one is sans-IO, incremental (bytes pushed in any chunking decode the same)
+//! and bounded: a frame is at most [`MAX_FRAME_LEN`] bytes; a corrupt or oversized one is a typed error, and the
+//! decoder resynchronises on the next magic. The crate's tests check round trips of every message through a decoder fed
+//! at random split points (proptest), the example exchange above byte for byte (the expected bytes made independently,
+//! with Python's `struct` and `zlib.crc32`), [`Configure::check`] at the edges of every limit, the [`StreamTracker`]'s
+//! anomaly classes, and every class of malformed input. Two fuzz targets in `fuzz/`, `daq_host_decoder` and
+//! `daq_device_decoder`, feed the decoders hostile bytes; run one with `cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run
+//! <target> -- -max_total_time=300` (`RUSTC_BOOTSTRAP` lets cargo-fuzz use its sanitizer flags on a stable toolchain).
 
 mod codes;
 mod command;

@@ -1,11 +1,18 @@
-//! Sans-IO codec of the USB HID boot keyboard input report, as a response keypad sends it (Device Class Definition for HID 1.11, appendix B.1;
-//! key codes from the HID Usage Tables, keyboard/keypad page 0x07).
+//! Sans-IO codec of the USB HID boot keyboard input report, as a response keypad sends it (Device Class Definition
+//! for HID 1.11, appendix B.1; key codes from the HID Usage Tables, keyboard/keypad page 0x07).
 //!
 //! A boot report is 8 bytes: a modifier bitmap (bit `i` is usage `0xE0 + i`: left Ctrl, Shift, Alt, GUI, then the
 //! right ones), a reserved byte, and up to 6 usage codes of the other keys held down (0 = empty slot). It says which
 //! keys are *held*, not what changed, so the decoder diffs each report against the previous one. When more keys are
 //! held than the report can carry, the device sends `ErrorRollOver` (usage 0x01) in every slot; the spec asks the host
 //! to keep the previous state then, and so does the decoder.
+//!
+//! Like every codec in `protocols/`, it does no I/O and trusts no input: a report of the wrong length or holding error
+//! codes is a typed [`ReportError`], and the decoder's state is then unchanged. The crate's tests decode reports byte
+//! for byte into key changes and round-trip [`encode`] and [`held_keys`] (proptest); the fuzz target `keypad_report` in
+//! `fuzz/` feeds [`BootDecoder`] arbitrary sequences of arbitrary reports; run it with `cd fuzz && RUSTC_BOOTSTRAP=1
+//! cargo fuzz run keypad_report -- -max_total_time=300` (`RUSTC_BOOTSTRAP` lets cargo-fuzz use its sanitizer flags on a
+//! stable toolchain).
 
 use std::collections::BTreeSet;
 

@@ -113,10 +113,10 @@
 //! | `LASER ON` | reply once the laser is stable: typically 1 s, at most 2 s; `LASER OFF` within 10 ms |
 //! | `*RST` | mirror self-test; reply within 2 s |
 //!
-//! Recommended host timeouts ([`Command::timeout_s`]): 250 ms, and 3 s for `*RST` and `LASER ON`. After a timeout the host must assume a
-//! stale reply may still arrive. It resynchronises: it sends `SYNC <t>` with a token it has not used before, and
-//! discards every reply (and every decode error) until `SYNC <t>` comes back; if that takes longer than a timeout,
-//! it repeats with a new token, and after three failures reports the controller lost.
+//! Recommended host timeouts ([`Command::timeout_s`]): 250 ms, and 3 s for `*RST` and `LASER ON`. After a timeout
+//! the host must assume a stale reply may still arrive. It resynchronises: it sends `SYNC <t>` with a token it has
+//! not used before, and discards every reply (and every decode error) until `SYNC <t>` comes back; if that takes
+//! longer than a timeout, it repeats with a new token, and after three failures reports the controller lost.
 //!
 //! # 7. Example exchange
 //!
@@ -157,6 +157,16 @@
 //! );
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! # 8. Codec properties and tests
+//!
+//! Like every codec in `protocols/`, this one is sans-IO (bytes in, typed messages out, and back), incremental (input
+//! split at any byte decodes the same) and bounded: a line longer than [`MAX_LINE_LEN`] is one typed error, and
+//! decoding resumes after its terminator. The crate's tests check round trips of every message at arbitrary split
+//! points (proptest), the example exchange of section 7 and the resynchronisation of section 6 byte for byte, and every
+//! class of malformed input. Two fuzz targets in `fuzz/`, `ldv_reply_decoder` and `ldv_command_decoder`, feed the
+//! decoders hostile bytes; run one with `cd fuzz && RUSTC_BOOTSTRAP=1 cargo fuzz run <target> -- -max_total_time=300`
+//! (`RUSTC_BOOTSTRAP` lets cargo-fuzz use its sanitizer flags on a stable toolchain).
 
 mod command;
 mod decoder;

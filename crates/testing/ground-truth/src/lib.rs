@@ -1,5 +1,5 @@
-//! The ground truth of a simulated plate as the paper measured it, for the analyses' tests, benchmarks and
-//! examples.
+//! The ground truth of a simulated plate as the paper measured it: the one fixture of the wave-field crates'
+//! (`metaplate-control`, `metaplate-analysis`) tests, benchmarks and examples, and a dev-dependency only.
 //!
 //! The paper measured every Green's function with the actuators' Kirkeby compensation in the chain (Materials and
 //! Methods), so what it focused with and analysed is plate x voice coil x inverse filter, not the plate's response to
@@ -12,13 +12,19 @@
 //! 2. through each actuator's voice coil (its linear part, [`VoiceCoil::frequency_response`] at the lab's audio
 //!    rate), giving velocity per unit drive;
 //! 3. per actuator, the driving-point response normalised by its median in-band gain, equalised by
-//!    [`design_equaliser`] with the calibration recipe's settings ([`CompensationConfig::calibration`]);
+//!    [`design_equaliser`] with the calibration recipe's settings ([`CompensationConfig::calibration`], over
+//!    `EqualiserConfig::calibration`, the one home of the paper's calibration settings);
 //! 4. every response through its actuator's filter, the filter's modelling delay removed, cut to the request's
 //!    length with a 10 ms fade-out.
 //!
 //! Steps 2 and 4 multiply spectra on an FFT at least as long as response plus filter, so the filter's convolution is
 //! linear; the coil's response is applied on the same grid, which wraps its ring-down (under 0.1 s for a 70 Hz
 //! suspension with Q 2) around a period of about 0.85 s, far below the plate's own truncation.
+//!
+//! [`GroundTruth::propagation`] hands the result over as control's
+//! [`PropagationMatrices`](metaplate_control::PropagationMatrices), the form the focusing and the analyses take;
+//! [`GroundTruth::builtin`] does the same for a built-in scene, and [`GroundTruthOptions`]' default is the paper's
+//! chain (0.5 s at 2 kHz, model band 40 to 700 Hz, compensated as the calibration recipe does it).
 
 use std::path::Path;
 
