@@ -198,6 +198,54 @@ fn a_malformed_file_names_the_record_and_line() {
     assert!(stderr.contains("record 1 (dataset 58), line 9"), "{stderr}");
 }
 
+/// A file of the universal-file corpus (`crates/interchange/tests/corpus/README.md`).
+fn corpus(name: &str) -> String {
+    format!("{}/../interchange/tests/corpus/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn files_other_writers_wrote_import_with_nodes_and_refusals_name_what_would_be_accepted() {
+    let dir = scratch("corpus");
+    let nodes = dir.join("nodes.csv");
+    std::fs::write(&nodes, "node,x_m,y_m\n0,0.0,0.0\n").unwrap();
+    let (nodes, out) = (nodes.to_str().unwrap(), dir.join("catman"));
+    // catman's acceleration time history (no dataset 2411): one point, integrated to velocity, the mapping printed.
+    let catman = corpus("time-history-not-all-columns-filled.uff");
+    let done = ok(&["import", "--uff", &catman, "--nodes", nodes, "--out", out.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&done.stderr);
+    assert!(stderr.contains("imported 1 responses (0 from frequency responses)"), "{stderr}");
+    assert!(stderr.contains("1 x 1 grid at 1 mm (from one point), 20000 Hz, 13 samples, in m/s"), "{stderr}");
+    assert!(
+        stderr.contains("ordinate: acceleration (m/s²) from data type 1 (general), units label \"m/s²\""),
+        "{stderr}"
+    );
+    assert!(stderr.contains("actuator 0: reference node 0 direction 0"), "{stderr}");
+    // `analyze` on one point of 13 samples says why it cannot.
+    let analysis = metaplate(&["analyze", "--data", out.to_str().unwrap()]);
+    assert!(!analysis.status.success());
+    assert!(!String::from_utf8_lossy(&analysis.stderr).trim().is_empty());
+
+    // Sound pressure is refused by name, with the flag that takes it.
+    let pressure = corpus("Sample_UFF58b_bin.uff");
+    let refused =
+        metaplate(&["import", "--uff", &pressure, "--nodes", nodes, "--out", dir.join("p").to_str().unwrap()]);
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("record 1 (dataset 58 from line 1), line 11, record 9 (ordinate data characteristics)"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("sound pressure (data type 21, \"Pa\")") && stderr.contains("--accept-unknown-quantity"),
+        "{stderr}"
+    );
+    // A PSD alone: no response, and the PSD named as skipped.
+    let psd = corpus("sample_dataset58_psd.uff");
+    let refused = metaplate(&["import", "--uff", &psd, "--out", dir.join("psd").to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(stderr.contains("skipped: 1 x dataset 58, function type 9 (power spectral density)"), "{stderr}");
+}
+
 /// The export benchmark (README's benchmark table): a full-size synthetic dataset, 1225 points (the metamaterial
 /// scene's 49 x 25 grid) x 8 actuators x 12000 f32 samples (470 MB), written through the store, then exported by the
 /// binary in each format; prints MB/s and records/s as `metaplate export` reports them.

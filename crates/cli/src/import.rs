@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use metaplate_interchange::{ImportOptions, import};
+use metaplate_interchange::{ImportOptions, import, skipped_summary};
 
 use crate::progress;
 
@@ -20,27 +20,49 @@ pub struct ImportArgs {
     /// Take the grid from the nodes' positions even when the files carry metaplate's grid.
     #[arg(long)]
     grid_from_nodes: bool,
+    /// Node positions as CSV (header `node,x_m,y_m` and optionally `z_m`; metres), for files without dataset 2411
+    /// (used in its place when given).
+    #[arg(long, value_name = "FILE")]
+    nodes: Option<PathBuf>,
+    /// Import responses whose ordinate is no motion (pressure, force, voltage, unknown) as they are, their unit
+    /// declared unknown (by default they are refused by name).
+    #[arg(long)]
+    accept_unknown_quantity: bool,
 }
 
 /// Runs `metaplate import`.
 pub fn run(args: &ImportArgs) -> anyhow::Result<()> {
     let bar = progress::bar(0, "importing");
-    let options = ImportOptions { grid_from_nodes: args.grid_from_nodes };
+    let options = ImportOptions {
+        grid_from_nodes: args.grid_from_nodes,
+        accept_unknown_quantity: args.accept_unknown_quantity,
+        nodes: args.nodes.clone(),
+    };
     let summary = import(&args.uff, &args.out, options, |p| {
         bar.set_length(p.total);
         bar.set_position(p.done);
     })?;
     bar.finish_and_clear();
     eprintln!(
-        "imported {} responses ({} from frequency responses) into {}: {} x {} grid at {} mm, {} Hz, {} samples",
+        "imported {} responses ({} from frequency responses) into {}: {} x {} grid at {} mm (from {}), {} Hz, {} \
+         samples, in {}",
         summary.rows,
         summary.from_frf,
         args.out.display(),
         summary.grid.nx,
         summary.grid.ny,
         summary.grid.spacing_m * 1e3,
+        summary.grid_from,
         summary.sample_rate_hz,
-        summary.ir_len
+        summary.ir_len,
+        summary.ir_unit,
     );
+    eprintln!("ordinate: {}", summary.conversion);
+    for a in &summary.actuators {
+        eprintln!("actuator {}: reference node {} direction {}", a.actuator, a.reference_node, a.direction);
+    }
+    if !summary.skipped.is_empty() {
+        eprintln!("skipped {} records: {}", summary.skipped.len(), skipped_summary(&summary.skipped));
+    }
     Ok(())
 }

@@ -4,6 +4,7 @@ use metaplate_dsp::fft;
 use metaplate_uff::{Complex64, Function58, FunctionType, Ordinate};
 
 use crate::error::{InterchangeError, refuse};
+use crate::quantity::Motion;
 
 /// An impulse response from one function.
 pub(crate) struct Converted {
@@ -18,21 +19,24 @@ pub(crate) struct Converted {
 }
 
 /// The impulse response of a time response (as read, from its start time) or of a frequency response function
-/// (see [`crate::import`](mod@crate::import)), in SI units: ordinates times `force_per_n / length_per_m` (dataset 164's factors).
+/// (see [`crate::import`](mod@crate::import)), in SI units: ordinates times `to_si` (the ordinate's factor over the
+/// denominator's), then turned into velocity from `motion` (`None`: a quantity declared unknown, kept as it is):
+/// an FRF's bins at frequency f divided by j2πf (acceleration) or multiplied by it (displacement), 0 Hz set to zero
+/// when dividing; a time response through the frequency domain of its own record (its FFT, the same factors, the
+/// inverse FFT: integration or differentiation over the record's band, the record taken as one period).
 /// `spectrum` is a reusable buffer.
 ///
 /// # Errors
 /// [`InterchangeError::Refused`] for a function that is neither a real time response nor a frequency response, an
 /// abscissa that is not a time step or a real FFT's frequencies, a time response starting after time 0, values out
-/// of the f32 range; [`InterchangeError::Dsp`] if the inverse transform fails.
+/// of the f32 range; [`InterchangeError::Dsp`] if a transform fails.
 pub(crate) fn to_ir(
     function: &Function58,
-    length_per_m: f64,
-    force_per_n: f64,
+    to_si: f64,
+    motion: Option<Motion>,
     spectrum: &mut Vec<Complex64>,
 ) -> Result<Converted, InterchangeError> {
     let h = &function.header;
-    let to_si = force_per_n / length_per_m;
     let finite = |v: f64| -> Result<f32, InterchangeError> {
         let v = (v * to_si) as f32;
         if v.is_finite() { Ok(v) } else { refuse!("a value is out of the f32 range in SI units") }
@@ -49,6 +53,14 @@ pub(crate) fn to_ir(
                     h.abscissa_start
                 );
             }
+            let velocity;
+            let values = match motion {
+                Some(Motion::Velocity) | None => values,
+                Some(motion) => {
+                    velocity = time_to_velocity(values, sample_rate_hz, motion, spectrum)?;
+                    &velocity
+                }
+            };
             let ir = values.iter().map(|&v| finite(v)).collect::<Result<Vec<f32>, _>>()?;
             Ok(Converted { ir, sample_rate_hz, pre_samples: pre as u32, from_frf: false })
         }
@@ -79,6 +91,9 @@ pub(crate) fn to_ir(
                     }
                 }
             }
+            for (k, bin) in spectrum.iter_mut().enumerate().take(last + 1).skip(k0) {
+                *bin = to_velocity(*bin, k as f64 * df, motion);
+            }
             // A real signal's spectrum is real at 0 Hz and at Nyquist.
             spectrum[0].im = 0.0;
             spectrum[n / 2].im = 0.0;
@@ -90,5 +105,67 @@ pub(crate) fn to_ir(
             Ok(Converted { ir, sample_rate_hz, pre_samples: 0, from_frf: true })
         }
         (FunctionType::Other(code), _) => refuse!("function type {code} is neither a time nor a frequency response"),
+    }
+}
+
+/// A spectrum's bin at `freq_hz` of `motion` as velocity: divided by j2πf (acceleration; 0 at 0 Hz), multiplied by it
+/// (displacement), kept (velocity, or `None`: declared unknown).
+fn to_velocity(bin: Complex64, freq_hz: f64, motion: Option<Motion>) -> Complex64 {
+    let jw = Complex64::new(0.0, 2.0 * std::f64::consts::PI * freq_hz);
+    match motion {
+        Some(Motion::Acceleration) if freq_hz > 0.0 => bin / jw,
+        Some(Motion::Acceleration) => Complex64::new(0.0, 0.0),
+        Some(Motion::Displacement) => bin * jw,
+        Some(Motion::Velocity) | None => bin,
+    }
+}
+
+/// A time record of `motion` at `sample_rate_hz` as velocity, through its FFT (the record taken as one period).
+fn time_to_velocity(
+    values: &[f64],
+    sample_rate_hz: f64,
+    motion: Motion,
+    spectrum: &mut Vec<Complex64>,
+) -> Result<Vec<f64>, InterchangeError> {
+    let n = values.len();
+    spectrum.clear();
+    spectrum.resize(fft::bin_count(n), Complex64::new(0.0, 0.0));
+    fft::forward_into(values, n, spectrum)?;
+    let df = sample_rate_hz / n as f64;
+    for (k, bin) in spectrum.iter_mut().enumerate() {
+        *bin = to_velocity(*bin, k as f64 * df, Some(motion));
+    }
+    if n.is_multiple_of(2)
+        && let Some(nyquist) = spectrum.last_mut()
+    {
+        // Real at Nyquist: the imaginary part j·f gives it has no real signal.
+        nyquist.im = 0.0;
+    }
+    Ok(fft::inverse(spectrum, n)?)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sine_of_acceleration_integrates_to_its_velocity() {
+        // 8 periods of 1 kHz over 8 ms at 64 kHz: a(t) = A sin(wt), v(t) = -A/w cos(wt).
+        let (fs, f, n) = (64_000.0, 1000.0, 512);
+        let w = 2.0 * std::f64::consts::PI * f;
+        let a: Vec<f64> = (0..n).map(|i| 3.0 * (w * i as f64 / fs).sin()).collect();
+        let v = time_to_velocity(&a, fs, Motion::Acceleration, &mut Vec::new()).unwrap();
+        for (i, got) in v.iter().enumerate() {
+            let want = -3.0 / w * (w * i as f64 / fs).cos();
+            // A whole number of periods: exact but for rounding (relative to the amplitude 3/w).
+            assert!((got - want).abs() < 1e-9 * 3.0 / w, "{i}: {got} vs {want}");
+        }
+        let d: Vec<f64> = (0..n).map(|i| 2.0 * (w * i as f64 / fs).cos()).collect();
+        let v = time_to_velocity(&d, fs, Motion::Displacement, &mut Vec::new()).unwrap();
+        for (i, got) in v.iter().enumerate() {
+            let want = -2.0 * w * (w * i as f64 / fs).sin();
+            assert!((got - want).abs() < 1e-9 * 2.0 * w, "{i}: {got} vs {want}");
+        }
     }
 }

@@ -34,8 +34,9 @@ pub enum InterchangeError {
     /// The store refused a read or a write.
     #[error(transparent)]
     Store(#[from] StoreError),
-    /// A universal file is malformed (the source names the record, line and field).
-    #[error("{file} is malformed")]
+    /// A universal file cannot be read: malformed, or a variant the codec does not read (the source names the
+    /// record, line and field, and what is accepted there).
+    #[error("{file} cannot be read")]
     Malformed {
         /// The file, as given.
         file: String,

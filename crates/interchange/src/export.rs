@@ -5,8 +5,9 @@
 //! labelled `nx * ny + 1 + actuator`, at the actuator's magnet); then per committed (point, actuator) one dataset
 //! 58/58b: the impulse response (function type 1, time from `-pre_samples / fs`), and with
 //! [`ExportOptions::frequency`] also the frequency response (type 4: the FFT of the impulse response referred to time
-//! 0, 0 Hz to Nyquist, complex). Ordinates are velocity (m/s) over force (N) for a dataset whose `ir` is in m/s/N;
-//! otherwise over "full-scale drive" (data type 0, unknown), as the dataset's description says.
+//! 0, 0 Hz to Nyquist, complex). Ordinates are velocity (m/s) over force (N) for a dataset whose `ir` is in m/s/N, over
+//! nothing for one in m/s (an imported operational record), a declared-unknown quantity as data type 0 "unknown";
+//! otherwise velocity over "full-scale drive" (data type 0, unknown), as the dataset's description says.
 //!
 //! The ID lines carry what an import needs to rebuild the dataset exactly ([`IdLines`](crate::IdLines)); other tools show them as
 //! text.
@@ -64,7 +65,8 @@ pub fn default_out(data: &Path) -> Result<PathBuf, InterchangeError> {
 }
 
 /// The actuators' magnet positions (x, y), m, indexed by actuator number: from the scene file `scene_file`, else
-/// from the built-in scene of the dataset in `data` when its id matches.
+/// from the reference nodes an import of universal files placed (so that an imported dataset exports as it came),
+/// else from the built-in scene of the dataset in `data` when its id matches.
 ///
 /// # Errors
 /// An unreadable scene file or dataset; [`InterchangeError::Refused`] when the dataset's scene is not a built-in
@@ -79,6 +81,9 @@ pub fn actuator_sites(data: &Path, scene_file: Option<&Path>) -> Result<Vec<(f64
                 source,
             })?;
             let id = &manifest.meta.scene;
+            if let Some(sites) = imported_sites(&manifest.meta.config)? {
+                return Ok(sites);
+            }
             match Scene::builtin(&id.name).ok().filter(|s| s.id() == *id) {
                 Some(scene) => scene,
                 None => refuse!(
@@ -90,6 +95,33 @@ pub fn actuator_sites(data: &Path, scene_file: Option<&Path>) -> Result<Vec<(f64
         }
     };
     Ok(scene.actuators.iter().map(|a| (a.x_m, a.y_m)).collect())
+}
+
+/// The actuators' positions an import stored (its `actuators` mapping, in the grid's frame), indexed by actuator
+/// number; `None` for a dataset that is no import of universal files with references placed.
+///
+/// # Errors
+/// [`InterchangeError::Refused`] naming an actuator whose reference node had no position in the imported files.
+fn imported_sites(
+    config: &serde_json::Map<String, serde_json::Value>,
+) -> Result<Option<Vec<(f64, f64)>>, InterchangeError> {
+    let Some(serde_json::Value::Array(actuators)) = config.get("actuators") else { return Ok(None) };
+    let mut sites = vec![None; actuators.len()];
+    for a in actuators {
+        let number = a["actuator"].as_u64().and_then(|n| usize::try_from(n).ok());
+        let Some(slot) = number.and_then(|n| sites.get_mut(n)) else { return Ok(None) };
+        *slot = match (a["x_m"].as_f64(), a["y_m"].as_f64()) {
+            (Some(x), Some(y)) => Some((x, y)),
+            _ => refuse!(
+                "actuator {} (reference node {}, direction {}) has no position: the imported files place no such node; \
+                 give the actuators' positions with --scene FILE",
+                a["actuator"],
+                a["reference_node"],
+                a["direction"]
+            ),
+        };
+    }
+    Ok(sites.into_iter().collect())
 }
 
 /// Writes the dataset in `data` to the universal file `out`, streaming (one batch file at a time);
@@ -161,7 +193,7 @@ pub fn export(
     let mut done = 0u64;
     let mut writer = RecordWriter {
         encoder,
-        per_newton: ir_is_per_newton(meta),
+        axes: axes(meta),
         pre_samples: meta.description.as_ref().map_or(0, |d| d.pre_samples),
         frequency: options.frequency,
         samples: Vec::new(),
@@ -204,21 +236,32 @@ fn node(label: u32, x_m: f64, y_m: f64) -> Node {
     }
 }
 
-/// Whether the dataset's `ir` is velocity per newton (the ground truth, or an import of such), rather than per
-/// full-scale drive.
-fn ir_is_per_newton(meta: &DatasetMeta) -> bool {
-    match &meta.description {
-        Some(description) => description.ir_unit == IR_UNIT_M_S_PER_N,
+/// The ordinate and denominator characteristics of the dataset's `ir`: velocity per newton (the ground truth, or an
+/// import of such); velocity alone (an import of operational records, `ir` in "m/s"); a quantity an import was told
+/// to take as declared unknown (data type 0, no denominator: no unit it is not); else velocity per full-scale drive.
+fn axes(meta: &DatasetMeta) -> (AxisCharacteristics, AxisCharacteristics) {
+    let velocity = AxisCharacteristics::new(11, "Velocity", "m/s");
+    let unit = match &meta.description {
+        Some(description) => description.ir_unit.as_str(),
         // Written before datasets described themselves: only the simulation's ground truth was per newton.
-        None => meta.recipe == "simulate-greens",
+        None if meta.recipe == "simulate-greens" => IR_UNIT_M_S_PER_N,
+        None => "",
+    };
+    match unit {
+        IR_UNIT_M_S_PER_N => (velocity, AxisCharacteristics::new(13, "Force", "N")),
+        "m/s" => (velocity, AxisCharacteristics::unused()),
+        u if u.starts_with("declared unknown") => {
+            (AxisCharacteristics::new(0, "Declared unknown", "unknown"), AxisCharacteristics::unused())
+        }
+        _ => (velocity, AxisCharacteristics::new(0, "Drive", "full scale")),
     }
 }
 
 /// Encodes responses of one dataset, reusing its buffers.
 struct RecordWriter {
     encoder: UffEncoder,
-    /// The dataset's `ir` is per newton (else per full-scale drive).
-    per_newton: bool,
+    /// The ordinate's and denominator's characteristics.
+    axes: (AxisCharacteristics, AxisCharacteristics),
     /// Samples before time 0 of every response.
     pre_samples: u32,
     /// Also the frequency response.
@@ -245,9 +288,7 @@ impl RecordWriter {
         let mut header =
             FunctionHeader::velocity_over_force(FunctionType::TimeResponse, response, reference, start_s, dt_s, "");
         header.id_lines = ids.clone();
-        if !self.per_newton {
-            header.denominator = AxisCharacteristics::new(0, "Drive", "full scale");
-        }
+        (header.ordinate, header.denominator) = self.axes.clone();
         self.encoder.encode_function(&header, OrdinateRef::Real(&self.samples), out)?;
         if self.frequency {
             let n = self.samples.len();

@@ -6,10 +6,11 @@ use metaplate_store::{DatasetMeta, IrMeta, Status};
 
 /// The ID lines of metaplate's records: `metaplate KEY=VALUE ...`, values without spaces.
 ///
-/// 1. `metaplate point=P actuator=A`: the dataset key;
+/// 1. `metaplate point=P actuator=A [measured_at_us=T]`: the dataset key, and the row's measurement time (µs since
+///    the Unix epoch) when it has one (up to 0.6 it was on line 4, where a long SNR cut it: both are read);
 /// 2. `metaplate grid=NXxNY spacing_m=H origin_m=X0,Y0`: the dataset's grid;
 /// 3. `metaplate scene=NAME scene_hash=HASH`: the scene id;
-/// 4. `metaplate status=S snr_db=X retries=R measured_at_us=T`: the row's quality (absent keys: not recorded);
+/// 4. `metaplate status=S snr_db=X retries=R`: the row's quality (absent keys: not recorded);
 /// 5. `metaplate recipe=R seed=S [estimated_error_db=E]`: where the dataset came from, and the row's estimated error
 ///    when it has one (line 4 is full).
 ///
@@ -45,15 +46,16 @@ impl SharedIds {
         if let Some(retries) = row.retries {
             quality.push_str(&format!(" retries={retries}"));
         }
-        if let Some(t) = row.measured_at_unix_us {
-            quality.push_str(&format!(" measured_at_us={t}"));
-        }
         let source = match row.estimated_error_db {
             Some(e) => cut(format!("{} estimated_error_db={e}", self.source)),
             None => self.source.clone(),
         };
         [
-            format!("metaplate point={} actuator={}", row.point_index, row.actuator),
+            // At most 77 columns: `u32`, `u16` and `i64` written in full.
+            match row.measured_at_unix_us {
+                Some(t) => format!("metaplate point={} actuator={} measured_at_us={t}", row.point_index, row.actuator),
+                None => format!("metaplate point={} actuator={}", row.point_index, row.actuator),
+            },
             self.grid.clone(),
             self.scene.clone(),
             cut(quality),
@@ -114,8 +116,13 @@ impl IdLines {
         Self::value(line, "estimated_error_db").and_then(|v| v.parse::<f64>().ok()).filter(|v| v.is_finite())
     }
 
-    /// The row quality of ID line 4: status, SNR (dB), retries, measurement time (µs since the Unix epoch); each
-    /// `None` when absent or unreadable.
+    /// The row's measurement time of ID line 1, µs since the Unix epoch, if it has one.
+    pub fn parse_measured_at(line: &str) -> Option<i64> {
+        Self::value(line, "measured_at_us").and_then(|v| v.parse().ok())
+    }
+
+    /// The row quality of ID line 4: status, SNR (dB), retries, and the measurement time (µs since the Unix epoch)
+    /// that files written before 0.7 put there; each `None` when absent or unreadable.
     pub fn parse_quality(line: &str) -> (Option<Status>, Option<f64>, Option<u32>, Option<i64>) {
         let status = Self::value(line, "status").and_then(Status::parse);
         let snr_db = Self::value(line, "snr_db").and_then(|v| v.parse::<f64>().ok()).filter(|v| v.is_finite());
@@ -160,14 +167,32 @@ mod tests {
         assert_eq!(IdLines::parse_key(&lines[0]), Some((row.point_index, 3)));
         assert_eq!(IdLines::parse_grid(&lines[1]), Some(meta.grid));
         assert_eq!(IdLines::parse_scene(&lines[2]), Some(meta.scene.clone()));
-        assert_eq!(
-            IdLines::parse_quality(&lines[3]),
-            (Some(Status::Valid), Some(61.25), Some(2), Some(1_700_000_000_123_456))
-        );
+        assert_eq!(IdLines::parse_quality(&lines[3]), (Some(Status::Valid), Some(61.25), Some(2), None));
+        assert_eq!(IdLines::parse_measured_at(&lines[0]), Some(1_700_000_000_123_456));
         assert_eq!(IdLines::parse_estimated_error(&lines[4]), Some(-31.5));
         assert_eq!(IdLines::value(&lines[4], "seed"), Some("42"));
         assert_eq!(IdLines::value(&lines[4], "recipe"), Some("scan"));
         assert!(lines.iter().all(|l| l.len() <= 80));
+    }
+
+    #[test]
+    fn the_measurement_time_survives_the_longest_quality_and_key() {
+        // An SNR with 17 significant digits and the largest key: line 4 was cut at 80 columns, and the time with it.
+        let meta = meta("scan", "metamaterial");
+        let mut row = IrMeta::at_grid(&meta.grid, 0, 0, u16::MAX, 24_000.0).unwrap();
+        row.point_index = u32::MAX;
+        (row.status, row.snr_db, row.retries, row.measured_at_unix_us) =
+            (Some(Status::Valid), Some(-61.234_567_890_123_45), Some(u32::MAX), Some(i64::MIN));
+        let lines = SharedIds::new(&meta).for_row(&row);
+        assert!(lines.iter().all(|l| l.len() <= 80), "{lines:?}");
+        assert_eq!(IdLines::parse_measured_at(&lines[0]), Some(i64::MIN));
+        assert_eq!(IdLines::parse_key(&lines[0]), Some((u32::MAX, u16::MAX)));
+        assert_eq!(
+            IdLines::parse_quality(&lines[3]),
+            (Some(Status::Valid), Some(-61.234_567_890_123_45), Some(u32::MAX), None)
+        );
+        // A file of 0.6 with the time on line 4 still gives it.
+        assert_eq!(IdLines::parse_quality("metaplate status=valid measured_at_us=17").3, Some(17));
     }
 
     #[test]

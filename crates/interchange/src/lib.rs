@@ -9,25 +9,32 @@
 //!
 //! - [`export`](mod@export): what the file holds, in order (units, nodes, then one response per committed
 //!   (point, actuator), and with [`ExportOptions`] its frequency response too).
-//! - [`import`](mod@import): how the grid and keys, the sample rate (`metaplate_uff::sample_rate_from_step`), the
-//!   function and the units are found, and what is refused.
+//! - [`import`](mod@import): what is read and what skipped, how the grid and keys, the actuators, the sample rate
+//!   (`metaplate_uff::sample_rate_from_step`), the function and the units are found, and what is refused.
+//! - [`lattice`]: 3-D node positions placed on the regular lattice of their plane.
 //! - [`IdLines`]: the ID lines of an exported record, the one format export and import share: they carry what an
 //!   import needs to rebuild the dataset exactly (key, grid, scene, row quality, source); a file without them
 //!   (another tool's) is placed by its nodes (`metaplate_core::grid::snap_to_grid`).
 //!
 //! Every error is an [`InterchangeError`] saying what and where. The crate's tests round-trip a dataset through a
-//! universal file in every format, from FRFs alone and placed by the nodes alone, and check each refusal.
+//! universal file in every format, from FRFs alone and placed by the nodes alone (on a tilted, rotated mesh too),
+//! import files with records that are no responses and responses of acceleration and displacement, check each
+//! refusal, and read the corpus of other writers' files in `tests/corpus/` as pyuff reads them.
 
 mod convert;
 mod error;
 pub mod export;
 mod id_lines;
 pub mod import;
+pub mod lattice;
+mod quantity;
+mod survey;
 
 pub use error::InterchangeError;
 pub use export::{ExportOptions, ExportSummary, actuator_sites, default_out, export};
 pub use id_lines::IdLines;
-pub use import::{ImportOptions, ImportSummary, import};
+pub use import::{ImportOptions, ImportSummary, import, skipped_summary};
+pub use survey::{ActuatorRef, ONE_POINT_SPACING_M, SkippedRecord, read_nodes_csv};
 
 /// How far an export or import is: `done` of `total` responses (a response: one (point, actuator) pair).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

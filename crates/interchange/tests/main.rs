@@ -2,5 +2,8 @@
 //! files differ, and imported back.
 
 mod common;
+mod corpus;
+mod foreign;
+mod pyuff_reads;
 mod refusals;
 mod round_trip;

@@ -4,22 +4,11 @@
 
 use std::path::{Path, PathBuf};
 
-use metaplate_interchange::{ImportOptions, InterchangeError, actuator_sites, default_out};
+use metaplate_interchange::{ImportOptions, actuator_sites, default_out};
 use metaplate_store::IR_UNIT_M_S_PER_N;
 use metaplate_uff::UffRecord;
 
 use crate::common;
-
-/// The error's message with its causes after colons, as the binary prints it.
-fn message(error: &InterchangeError) -> String {
-    let mut text = error.to_string();
-    let mut source = std::error::Error::source(error);
-    while let Some(cause) = source {
-        text.push_str(&format!(": {cause}"));
-        source = cause.source();
-    }
-    text
-}
 
 /// A dataset of 2 actuators exported in binary double precision: (its directory, the file).
 fn exported(dir: &Path) -> (PathBuf, PathBuf) {
@@ -30,28 +19,39 @@ fn exported(dir: &Path) -> (PathBuf, PathBuf) {
 }
 
 fn refusal(files: &[PathBuf], out: &Path) -> String {
-    message(&common::import(files, out, ImportOptions::default()).unwrap_err())
+    common::message(&common::import(files, out, ImportOptions::default()).unwrap_err())
 }
 
 #[test]
-fn an_ordinate_that_is_not_velocity_is_refused_naming_the_file_and_record() {
+fn an_ordinate_that_is_no_motion_is_refused_naming_the_file_record_line_field_and_what_is_accepted() {
     let tmp = tempfile::tempdir().unwrap();
     let (_, file) = exported(tmp.path());
-    let displacement = tmp.path().join("displacement.uff");
+    let pressure = tmp.path().join("pressure.uff");
     let options = common::binary_double();
-    common::rewrite(&file, &displacement, options.format, options.precision, |record| {
+    common::rewrite(&file, &pressure, options.format, options.precision, |record| {
         if let UffRecord::Function(f) = record {
-            f.header.ordinate.data_type = 8;
-            f.header.ordinate.label = "Displacement".into();
+            f.header.ordinate.data_type = 15;
+            f.header.ordinate.units_label = "Pa".into();
         }
         true
     });
-    let why = refusal(std::slice::from_ref(&displacement), &tmp.path().join("out"));
+    let why = refusal(std::slice::from_ref(&pressure), &tmp.path().join("out"));
+    // Records 1 and 2 are units and nodes (lines 1-6 and 7-37); the first response opens at line 38.
     assert!(
-        why.starts_with(&format!("{} record 3: the ordinate is Displacement (data type 8)", displacement.display())),
+        why.starts_with(&format!(
+            "{} record 3 (dataset 58 from line 38), line 48, record 9 (ordinate data characteristics): the ordinate \
+             is pressure (data type 15, \"Pa\"); metaplate imports velocity, and acceleration or displacement",
+            pressure.display()
+        )),
         "{why}"
     );
+    assert!(why.ends_with("--accept-unknown-quantity imports it as declared unknown"), "{why}");
     assert!(!tmp.path().join("out").exists(), "nothing written");
+    // Declared unknown, it imports as it is, and says so.
+    let options = ImportOptions { accept_unknown_quantity: true, ..ImportOptions::default() };
+    let summary = common::import(std::slice::from_ref(&pressure), &tmp.path().join("out"), options).unwrap();
+    assert_eq!(summary.ir_unit, "declared unknown (pressure (data type 15, \"Pa\"))");
+    assert_eq!(summary.rows, 24);
 }
 
 #[test]
@@ -60,7 +60,8 @@ fn two_responses_of_one_key_and_type_are_refused_naming_both_records() {
     let (_, file) = exported(tmp.path());
     let why = refusal(&[file.clone(), file.clone()], &tmp.path().join("out"));
     assert!(why.contains("has two responses of one type"), "{why}");
-    assert!(why.contains(&format!("{} record 3 and {} record 3", file.display(), file.display())), "{why}");
+    let at = format!("{} record 3 (dataset 58 from line 38)", file.display());
+    assert!(why.contains(&format!("{at} and {at}")), "{why}");
 }
 
 #[test]
@@ -77,8 +78,17 @@ fn foreign_responses_without_nodes_cannot_be_placed() {
         }
         _ => true,
     });
-    let why = refusal(&[bare], &tmp.path().join("out"));
-    assert!(why.starts_with("response node 1 has no coordinates (no dataset 2411 lists it)"), "{why}");
+    let why = refusal(std::slice::from_ref(&bare), &tmp.path().join("out"));
+    // Without dataset 2411 the units take lines 1-6 and the first response opens at line 7.
+    assert_eq!(
+        why,
+        format!(
+            "{} record 2 (dataset 58 from line 7), line 14, record 6 (DOF identification), response node: node 1 has \
+             no position: no dataset 2411 lists it; give the positions with --nodes FILE (CSV columns node,x_m,y_m \
+             and optionally z_m)",
+            bare.display()
+        )
+    );
 }
 
 #[test]
@@ -88,7 +98,11 @@ fn files_without_responses_and_malformed_files_are_refused_by_name() {
     let headers = tmp.path().join("headers.uff");
     let options = common::binary_double();
     common::rewrite(&file, &headers, options.format, options.precision, |r| !matches!(r, UffRecord::Function(_)));
-    assert_eq!(refusal(&[headers], &tmp.path().join("a")), "the files hold no dataset 58 or 58b (no response)");
+    assert_eq!(
+        refusal(&[headers], &tmp.path().join("a")),
+        "the files hold no response (a dataset 58 or 58b of function type 1, time response, or 4, frequency \
+         response function)"
+    );
 
     let bad = tmp.path().join("bad.uff");
     let mut text = String::from("    -1\n    58\n");
@@ -98,7 +112,7 @@ fn files_without_responses_and_malformed_files_are_refused_by_name() {
     text.push_str("    x         0    0         0 NONE               1   3 NONE               1   3\n    -1\n");
     std::fs::write(&bad, text).unwrap();
     let why = refusal(std::slice::from_ref(&bad), &tmp.path().join("b"));
-    assert!(why.starts_with(&format!("{} is malformed: record 1 (dataset 58), line 9", bad.display())), "{why}");
+    assert!(why.starts_with(&format!("{} cannot be read: record 1 (dataset 58), line 9", bad.display())), "{why}");
 
     let missing = tmp.path().join("missing.uff");
     assert!(
@@ -122,15 +136,15 @@ fn an_export_needs_every_actuators_position_and_a_name_for_its_default_file() {
     let out = tmp.path().join("x.uff");
     let error =
         metaplate_interchange::export(&data, &out, &common::binary_double(), &[(0.0, 0.0)], |_| {}).unwrap_err();
-    assert_eq!(message(&error), "actuator 1 has no position in the scene (1 actuators)");
+    assert_eq!(common::message(&error), "actuator 1 has no position in the scene (1 actuators)");
 
     assert_eq!(default_out(&data).unwrap(), tmp.path().join("original.uff"));
-    assert!(message(&default_out(Path::new("/")).unwrap_err()).contains("has no directory name: give --out"));
+    assert!(common::message(&default_out(Path::new("/")).unwrap_err()).contains("has no directory name: give --out"));
 
     assert_eq!(actuator_sites(&data, None).unwrap(), common::sites(), "the dataset's built-in scene");
     let scene_file = tmp.path().join("no-such-scene.toml");
     assert!(
-        message(&actuator_sites(&data, Some(&scene_file)).unwrap_err())
+        common::message(&actuator_sites(&data, Some(&scene_file)).unwrap_err())
             .starts_with(&format!("reading scene {}", scene_file.display()))
     );
 }

@@ -94,7 +94,12 @@ fn without_metaplate_id_lines_the_grid_and_actuators_come_from_the_nodes() {
     });
     for (path, grid_from_nodes) in [(&foreign, false), (&file, true)] {
         let back = tmp.path().join(format!("back-{grid_from_nodes}"));
-        common::import(std::slice::from_ref(path), &back, ImportOptions { grid_from_nodes }).unwrap();
+        common::import(
+            std::slice::from_ref(path),
+            &back,
+            ImportOptions { grid_from_nodes, ..ImportOptions::default() },
+        )
+        .unwrap();
         let imported = Dataset::open(&back).unwrap();
         let meta = &imported.manifest().meta;
         assert_eq!(meta.grid, original.manifest().meta.grid, "the 4 x 3 grid found again");

@@ -1,7 +1,7 @@
 //! The encoder: records to bytes, appended to the caller's buffer.
 
 use crate::error::EncodeError;
-use crate::fortran::{push_exp, push_int, push_left, push_right};
+use crate::fortran::{latin1, push_exp, push_int, push_left, push_right};
 use crate::model::{AxisCharacteristics, Dof, FunctionHeader, Nodes2411, OrdinateRef, UffRecord, Units164};
 
 /// Byte order of 58b binary data (field 3 of the 58b identifier line).
@@ -289,12 +289,13 @@ fn push_text(
     justify: Justify,
 ) -> Result<(), EncodeError> {
     let text = if text.is_empty() { "NONE" } else { text };
-    if text.len() > width || !text.bytes().all(|b| (0x20..=0x7e).contains(&b)) {
-        return Err(EncodeError::Text { field, text: text.to_owned(), max_len: width });
-    }
+    let bytes = match latin1(text) {
+        Some(bytes) if bytes.len() <= width => bytes,
+        _ => return Err(EncodeError::Text { field, text: text.to_owned(), max_len: width }),
+    };
     match justify {
-        Justify::Left => push_left(out, text.as_bytes(), width),
-        Justify::Right => push_right(out, text.as_bytes(), width),
+        Justify::Left => push_left(out, &bytes, width),
+        Justify::Right => push_right(out, &bytes, width),
     }
     Ok(())
 }
@@ -320,7 +321,7 @@ fn push_checked_int(
 fn push_dof(out: &mut Vec<u8>, which: &'static str, dof: &Dof) -> Result<(), EncodeError> {
     out.push(b' ');
     push_text(out, which, &dof.entity, 10, Justify::Right)?;
-    push_checked_int(out, which, i64::from(dof.node), 0, 9_999_999_999, 10)?;
+    push_checked_int(out, which, dof.node, -999_999_999, 9_999_999_999, 10)?;
     push_checked_int(out, "direction", i64::from(dof.direction), -6, 6, 4)
 }
 
@@ -343,7 +344,9 @@ fn write_units(units: &Units164, out: &mut Vec<u8>) -> Result<(), EncodeError> {
     // UffRecord 1: Format(I10,20A1,I10); pyuff right-justifies the description.
     push_checked_int(out, "units code", i64::from(units.units_code), 0, 9_999_999_999, 10)?;
     push_text(out, "units description", &units.description, 20, Justify::Right)?;
-    push_checked_int(out, "temperature mode", i64::from(units.temperature_mode), 0, 9_999_999_999, 10)?;
+    if let Some(mode) = units.temperature_mode {
+        push_checked_int(out, "temperature mode", i64::from(mode), 0, 9_999_999_999, 10)?;
+    }
     out.push(b'\n');
     // UffRecord 2: Format(3D25.17), then the temperature offset on its own line (as pyuff and I-DEAS write it).
     let factors = [

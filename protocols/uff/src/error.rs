@@ -121,9 +121,9 @@ pub enum Malformed {
 /// Why a record cannot be encoded. Nothing is appended to the caller's buffer when encoding fails.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EncodeError {
-    /// A text field is too long for its columns, or holds a character outside printable ASCII (which would shift
+    /// A text field is too long for its columns, or holds a character outside printable Latin-1 (which would shift
     /// the fixed columns of every reader).
-    #[error("{field} {text:?} is not at most {max_len} printable ASCII characters")]
+    #[error("{field} {text:?} is not at most {max_len} printable Latin-1 characters")]
     Text {
         /// Which field.
         field: &'static str,

@@ -104,14 +104,27 @@ pub(crate) fn parse_real(field: &[u8]) -> Option<f64> {
     std::str::from_utf8(text.get(..len)?).ok()?.parse().ok()
 }
 
-/// A text field (`A`): trimmed, each byte outside printable ASCII replaced by `?` (so that a record decoded can
-/// always be written back column for column); blank becomes "NONE", the specification's word for unused.
+/// A text field (`A`): trimmed, each byte read as Latin-1 (ISO 8859-1, what the I-DEAS era and many writers use
+/// for `²`, `°`, `µ`), control characters (below 0x20 and 0x7f to 0x9f) replaced by `?`; blank becomes "NONE",
+/// the specification's word for unused. One byte is one character, so a record decoded can always be written back
+/// column for column ([`latin1`]). UTF-8 text (catman writes `m/s²` so) reads as its bytes in Latin-1 (`m/sÂ²`); a
+/// user of the text recovers it with [`crate::as_written`].
 pub(crate) fn parse_text(field: &[u8]) -> String {
     let field = trim(field);
     if field.is_empty() {
         return "NONE".to_owned();
     }
-    field.iter().map(|&b| if (0x20..=0x7e).contains(&b) { char::from(b) } else { '?' }).collect()
+    field.iter().map(|&b| if is_text_byte(b) { char::from(b) } else { '?' }).collect()
+}
+
+/// Whether a byte is printable Latin-1 (a text field's bytes).
+fn is_text_byte(b: u8) -> bool {
+    (0x20..=0x7e).contains(&b) || b >= 0xa0
+}
+
+/// The Latin-1 bytes of `text`, one per character, or `None` if a character is not printable Latin-1.
+pub(crate) fn latin1(text: &str) -> Option<Vec<u8>> {
+    text.chars().map(|c| u8::try_from(u32::from(c)).ok().filter(|&b| is_text_byte(b))).collect()
 }
 
 #[cfg(test)]
@@ -148,7 +161,10 @@ mod tests {
         assert!(parse_real(b"NaN").unwrap().is_nan());
         assert_eq!(parse_int(b"   -12"), Some(-12));
         assert_eq!(parse_int(b" 1 2"), None);
-        assert_eq!(parse_text(b"  caf\xc3\xa9  "), "caf??");
+        assert_eq!(parse_text(b"  caf\xe9 m/s\xb2 \x07 "), "caf\u{e9} m/s\u{b2} ?");
+        assert_eq!(parse_text(b"caf\xc3\xa9"), "caf\u{c3}\u{a9}");
+        assert_eq!(latin1("m/s\u{b2}"), Some(b"m/s\xb2".to_vec()));
+        assert_eq!(latin1("\u{20ac}"), None);
         assert_eq!(parse_text(b"    "), "NONE");
     }
 }

@@ -42,8 +42,18 @@
 //! encoder ([`EncodeError::Value`]) and reported by the decoder ([`Malformed::NonFinite`]): a decoded record holds
 //! only finite numbers.
 //!
-//! Text fields are printable ASCII (the encoder refuses anything else, which would shift the columns; the decoder
-//! shows other bytes as `?`), trimmed on reading, with "NONE" for blank (the specification's word for unused).
+//! Text fields are printable Latin-1, one character a byte (the encoder refuses anything else, which would shift
+//! the columns; the decoder shows control bytes as `?`), trimmed on reading, with "NONE" for blank (the
+//! specification's word for unused).
+//!
+//! # What other writers write
+//!
+//! The decoder reads these departures, each seen in public files: dataset 164 without its temperature mode (LMS
+//! Test.Lab); zeros past the count record 7 announces on the line that completes it; reference (and response) nodes
+//! 0 or negative; CR, LF or CRLF line ends (which, learnt at the first line end, so that a CR-only 58b's data may
+//! begin with a line feed byte); numbers separated by blanks, of any width, or fixed-width with none between them;
+//! Latin-1 text. [`UffDecoder::only_functions`] steps over datasets 58 of other function types (coherence, PSD) as
+//! soon as record 6 is read, unchecked, so that an importer is not failed by a record it does not use.
 //!
 //! # 58b byte counts
 //!

@@ -23,10 +23,11 @@ pub enum UffRecord {
 pub struct Units164 {
     /// Units code: 1 SI (metre, newton), 2 BG, 3 MG, 4 BA, 5 MM, 6 CM, 7 IN, 8 GM, 9 user-defined.
     pub units_code: u32,
-    /// Free description (at most 20 printable ASCII characters; documentation only).
+    /// Free description (at most 20 printable Latin-1 characters; documentation only).
     pub description: String,
-    /// Temperature mode: 1 absolute, 2 relative.
-    pub temperature_mode: u32,
+    /// Temperature mode: 1 absolute, 2 relative; `None` when the file leaves it blank (LMS Test.Lab writes
+    /// `         9USER_DEFINED` and no mode).
+    pub temperature_mode: Option<u32>,
     /// File length units per metre.
     pub length_per_m: f64,
     /// File force units per newton.
@@ -43,7 +44,7 @@ impl Units164 {
         Self {
             units_code: 1,
             description: "SI: Meter (newton)".to_owned(),
-            temperature_mode: 2,
+            temperature_mode: Some(2),
             length_per_m: 1.0,
             force_per_n: 1.0,
             temperature_per_k: 1.0,
@@ -108,10 +109,11 @@ impl FunctionType {
 /// A nodal degree of freedom: an entity name, a node label and a direction (record 6).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Dof {
-    /// Entity name (at most 10 printable ASCII characters; "NONE" if unused).
+    /// Entity name (at most 10 printable Latin-1 characters; "NONE" if unused).
     pub entity: String,
-    /// Node label (metaplate: the grid point for the response, the actuator for the reference).
-    pub node: u32,
+    /// Node label (metaplate: the grid point for the response, the actuator for the reference). Writers use 0
+    /// and negative labels for "no node" (LMS Test.Lab's throughput records have reference node -1), so any I10.
+    pub node: i64,
     /// Direction: 0 scalar, ±1..±3 translation along ±X, ±Y, ±Z, ±4..±6 rotation about them.
     pub direction: i8,
 }
@@ -119,7 +121,7 @@ pub struct Dof {
 impl Dof {
     /// The degree of freedom `+Z` translation of `node` with no entity name: a plate's out-of-plane motion.
     pub fn z(node: u32) -> Self {
-        Self { entity: "NONE".to_owned(), node, direction: 3 }
+        Self { entity: "NONE".to_owned(), node: i64::from(node), direction: 3 }
     }
 }
 
@@ -135,9 +137,9 @@ pub struct AxisCharacteristics {
     pub force_exponent: i32,
     /// Temperature units exponent.
     pub temperature_exponent: i32,
-    /// Axis label (at most 20 printable ASCII characters; "NONE" if unused).
+    /// Axis label (at most 20 printable Latin-1 characters; "NONE" if unused).
     pub label: String,
-    /// Axis units label (at most 20 printable ASCII characters; "NONE" if unused).
+    /// Axis units label (at most 20 printable Latin-1 characters; "NONE" if unused).
     pub units_label: String,
 }
 
@@ -220,7 +222,7 @@ impl OrdinateRef<'_> {
 /// axes' characteristics.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FunctionHeader {
-    /// ID lines 1 to 5 (records 1 to 5; at most 80 printable ASCII characters each, "NONE" if unused). Line 1
+    /// ID lines 1 to 5 (records 1 to 5; at most 80 printable Latin-1 characters each, "NONE" if unused). Line 1
     /// describes the function, line 3 usually holds the date.
     pub id_lines: [String; 5],
     /// Function type (record 6, field 1).
@@ -305,4 +307,7 @@ pub struct OtherDataset {
     pub binary: bool,
     /// Line number (from 1) of its opening delimiter.
     pub line: u64,
+    /// For a dataset 58 stepped over by [`UffDecoder::only_functions`](crate::UffDecoder::only_functions): its
+    /// function type code (record 6, field 1).
+    pub function_type: Option<u32>,
 }

@@ -7,3 +7,4 @@ mod malformed;
 mod pyuff_files;
 mod pyuff_reads;
 mod roundtrip;
+mod writers;

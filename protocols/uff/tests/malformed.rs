@@ -219,7 +219,12 @@ fn unsupported_variants_are_named() {
     let bytes = file(Format::Ascii, Precision::Double, false);
     let (error, results) =
         the_error(&replace(&bytes, "         4         7         1", "         4         7         0"));
-    assert_eq!(error.kind, Malformed::Unsupported { what: "uneven abscissa spacing (0)".to_owned() });
+    assert_eq!(
+        error.kind,
+        Malformed::Unsupported {
+            what: "uneven abscissa spacing (record 7, columns 21-30: 0); an even abscissa (1) is read".to_owned()
+        }
+    );
     assert_eq!(error.location, at(3, 58, 24));
     assert_recovered(&results);
     let bytes = file(LE, Precision::Double, false);
@@ -281,7 +286,7 @@ fn the_encoder_refuses_what_it_cannot_write_and_appends_nothing() {
     header.abscissa_step = 0.0;
     assert!(matches!(refuse(OrdinateRef::Real(&[1.0]), &header, &mut out), EncodeError::Header { .. }));
     let mut header = base.header.clone();
-    header.id_lines[2] = "é".to_owned();
+    header.id_lines[2] = "€ is not Latin-1".to_owned();
     assert!(matches!(refuse(OrdinateRef::Real(&[1.0]), &header, &mut out), EncodeError::Text { field: "ID line", .. }));
     let mut header = base.header.clone();
     header.response.entity = "ELEVENCHARS".to_owned();

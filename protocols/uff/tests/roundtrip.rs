@@ -36,8 +36,9 @@ fn value(precision: Precision) -> BoxedStrategy<f64> {
 }
 
 fn text(max_len: usize) -> impl Strategy<Value = String> {
-    // Printable ASCII without leading or trailing blanks, which reading trims.
-    prop::string::string_regex(&format!("[!-~]([ -~]{{0,{}}}[!-~])?", max_len - 2)).unwrap()
+    // Printable Latin-1 (one byte a character in the file: `²`, `°`, `µ` as the I-DEAS era writes them) without
+    // leading or trailing blanks, which reading trims.
+    prop::string::string_regex(&format!("[!-~¡-ÿ]([ -~\\x{{a0}}-ÿ]{{0,{}}}[!-~¡-ÿ])?", max_len - 2)).unwrap()
 }
 
 fn axis() -> impl Strategy<Value = AxisCharacteristics> {
@@ -54,7 +55,12 @@ fn axis() -> impl Strategy<Value = AxisCharacteristics> {
 }
 
 fn dof() -> impl Strategy<Value = Dof> {
-    (text(10), any::<u32>(), -6i8..=6).prop_map(|(entity, node, direction)| Dof { entity, node, direction })
+    // Any I10 label: writers use 0 and negative ones (LMS: reference node -1).
+    (text(10), -999_999_999i64..=9_999_999_999, -6i8..=6).prop_map(|(entity, node, direction)| Dof {
+        entity,
+        node,
+        direction,
+    })
 }
 
 fn header() -> impl Strategy<Value = FunctionHeader> {
@@ -180,6 +186,7 @@ proptest! {
     fn units_and_nodes_round_trip_exactly(
         factors in prop::array::uniform4(any::<f64>().prop_filter("finite", |v| v.is_finite())),
         code in 1u32..10,
+        temperature_mode in prop::option::of(1u32..3),
         description in text(20),
         positions in prop::collection::vec((any::<u32>(), prop::array::uniform3(any::<f64>().prop_filter("finite", |v| v.is_finite()))), 0..20),
         chunk in 1usize..300,
@@ -187,7 +194,7 @@ proptest! {
         let units = Units164 {
             units_code: code,
             description,
-            temperature_mode: 1,
+            temperature_mode,
             length_per_m: factors[0],
             force_per_n: factors[1],
             temperature_per_k: factors[2],

@@ -37,8 +37,11 @@ pub fn dataset(dir: &Path, actuators: u16, pre_samples: u32, ir_unit: &str) -> P
                 meta.status = Some(if point % 5 == 1 { Status::ReMeasured } else { Status::Valid });
                 meta.snr_db = Some(40.0 + point as f64 + 0.25 * f64::from(actuator));
                 meta.retries = Some(u32::from(point % 5 == 1));
-                // Line 4 of the ID lines holds 80 columns: a re-measured row's time would be cut (see the report).
-                meta.measured_at_unix_us = (point % 5 != 1).then_some(1_700_000_000_000_000 + point as i64);
+                // A long SNR with every other field: up to 0.6 ID line 4 was cut at 80 columns and lost the time.
+                if point % 5 == 1 {
+                    meta.snr_db = Some(-123.456_789_012_345_67);
+                }
+                meta.measured_at_unix_us = Some(1_700_000_000_000_000 + point as i64);
                 meta.estimated_error_db = (actuator == 0).then_some(-30.5);
                 let seed = (point * 7 + usize::from(actuator) * 13) as f32;
                 let ir =
@@ -116,4 +119,15 @@ pub fn assert_same(original: &Dataset, imported: &Dataset, rel: f64, what: &str)
         let m = imported.meta(p, a).unwrap();
         assert_eq!((m.x_m, m.y_m, m.sample_rate_hz), (meta.x_m, meta.y_m, meta.sample_rate_hz), "{what}");
     }
+}
+
+/// The error's message with its causes after colons, as the binary prints it.
+pub fn message(error: &InterchangeError) -> String {
+    let mut text = error.to_string();
+    let mut source = std::error::Error::source(error);
+    while let Some(cause) = source {
+        text.push_str(&format!(": {cause}"));
+        source = cause.source();
+    }
+    text
 }

@@ -14,15 +14,19 @@ use crate::model::{
 impl UffDecoder {
     pub(super) fn step_units(
         &mut self,
-        record1: Option<(u32, String, u32)>,
+        record1: Option<(u32, String, Option<u32>)>,
         mut factors: Vec<f64>,
         line: &[u8],
         is_delimiter: bool,
     ) -> Step {
         let Some(record1) = record1 else {
-            // UffRecord 1: Format(I10,20A1,I10).
+            // UffRecord 1: Format(I10,20A1,I10); LMS Test.Lab leaves the temperature mode out.
             let parsed = self.u32_field("units code", line, 0, 10).and_then(|code| {
-                let mode = self.u32_field("temperature mode", line, 30, 10)?;
+                let mode = if trim(columns(line, 30, 10)).is_empty() {
+                    None
+                } else {
+                    Some(self.u32_field("temperature mode", line, 30, 10)?)
+                };
                 Ok((code, parse_text(columns(line, 10, 20)), mode))
             });
             return match parsed {
@@ -188,7 +192,7 @@ impl UffDecoder {
         let version = self.u32_field("version number", r6, 15, 5).map_err(at)?;
         let load_case = self.u32_field("load case identification number", r6, 20, 10).map_err(at)?;
         let dof = |start: usize, name: &'static str| -> Result<Dof, Malformed> {
-            let node = self.u32_field(name, r6, start + 11, 10)?;
+            let node = self.int_field(name, r6, start + 11, 10, -999_999_999..=9_999_999_999, "I10")?;
             let direction = self.int_field("direction", r6, start + 21, 4, -6..=6, "-6 to 6")?;
             Ok(Dof { entity: parse_text(columns(r6, start + 1, 10)), node, direction: direction as i8 })
         };
@@ -209,7 +213,8 @@ impl UffDecoder {
             self.int_field("number of values", r7, 10, 10, 1..=i64::MAX / 2, "I10 (at least 1)").map_err(at)?;
         let spacing = self.int_field("abscissa spacing", r7, 20, 10, 0..=1, "0 or 1").map_err(at)?;
         if spacing != 1 {
-            return Err(at(Malformed::Unsupported { what: "uneven abscissa spacing (0)".to_owned() }));
+            let what = "uneven abscissa spacing (record 7, columns 21-30: 0); an even abscissa (1) is read".to_owned();
+            return Err(at(Malformed::Unsupported { what }));
         }
         let real = |start: usize, field: &'static str| -> Result<f64, Malformed> {
             match parse_real(columns(r7, start, 13)) {
@@ -272,32 +277,29 @@ impl UffDecoder {
             let kind = Malformed::TooFewValues { expected: layout.reals, found: reals.len() as u64 };
             return Step::Emit(Err(self.error(kind)));
         }
-        // Cases 1 and 3: 6E13.5; cases 5 and 7: 4E20.12.
+        // Cases 1 and 3: 6E13.5; cases 5 and 7: 4E20.12. Writers differ in widths and digits, so a line whose
+        // blank-separated words are all numbers is read as words; else by the format's columns (numbers written
+        // with no space between them, Fortran's `0.12345+100`).
         let (width, format) = match layout.precision {
             Precision::Single => (13, "E13.5"),
             Precision::Double => (20, "E20.12"),
         };
-        let mut start = 0;
-        while start < line.len() {
-            let field = columns(line, start, width);
-            if trim(field).is_empty() {
-                // Blank columns end the values of a line; nothing but blanks may follow.
-                if !trim(columns(line, start, usize::MAX)).is_empty() {
-                    return self.fail(self.field_error("data value", line, start, width, format));
-                }
-                break;
-            }
-            let Some(value) = parse_real(field) else {
-                return self.fail(self.field_error("data value", line, start, width, format));
-            };
+        let values = match ValueSplit::of(line, width) {
+            Ok(split) => split,
+            Err(start) => return self.fail(self.field_error("data value", line, start, width, format)),
+        };
+        for value in values.iter(line) {
             if reals.len() as u64 >= layout.reals {
+                // Several writers pad the last line with zeros past the count record 7 announces.
+                if value == 0.0 {
+                    continue;
+                }
                 return self.fail(Malformed::TooManyValues { expected: layout.reals });
             }
             if !value.is_finite() {
                 return self.fail(Malformed::NonFinite { index: reals.len() as u64, value });
             }
             reals.push(value);
-            start += width;
         }
         if reals.len() as u64 == layout.reals {
             self.state = State::Closing { record: Box::new(function(*header, layout, reals)), blank_allowed: false };
@@ -354,6 +356,52 @@ impl UffDecoder {
             Step::Wait
         }
     }
+}
+
+/// How a line of ASCII values splits into numbers.
+#[derive(Debug, Clone, Copy)]
+enum ValueSplit {
+    /// Blank-separated words.
+    Words,
+    /// Fixed columns of `width`, in the first `end` bytes of the line.
+    Columns { width: usize, end: usize },
+}
+
+impl ValueSplit {
+    /// The split that reads every number of `line`, or the first column (0-based) of a field that is no number.
+    fn of(line: &[u8], width: usize) -> Result<Self, usize> {
+        if words(line).all(|word| parse_real(word).is_some()) {
+            return Ok(ValueSplit::Words);
+        }
+        let mut start = 0;
+        while start < line.len() {
+            let field = columns(line, start, width);
+            if trim(field).is_empty() {
+                // Blank columns end the values of a line; nothing but blanks may follow.
+                let rest_blank = trim(columns(line, start, usize::MAX)).is_empty();
+                return if rest_blank { Ok(ValueSplit::Columns { width, end: start }) } else { Err(start) };
+            }
+            if parse_real(field).is_none() {
+                return Err(start);
+            }
+            start += width;
+        }
+        Ok(ValueSplit::Columns { width, end: line.len() })
+    }
+
+    /// The numbers of `line` (whose split [`ValueSplit::of`] found).
+    fn iter(self, line: &[u8]) -> impl Iterator<Item = f64> + '_ {
+        let (by_words, by_columns) = match self {
+            ValueSplit::Words => (Some(words(line)), None),
+            ValueSplit::Columns { width, end } => (None, Some(line.get(..end).unwrap_or(line).chunks(width.max(1)))),
+        };
+        by_words.into_iter().flatten().chain(by_columns.into_iter().flatten()).filter_map(parse_real)
+    }
+}
+
+/// The blank-separated words of a line.
+fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {
+    line.split(|&b| b == b' ' || b == b'\t').filter(|w| !w.is_empty())
 }
 
 fn function(header: FunctionHeader, layout: Layout, reals: Vec<f64>) -> UffRecord {

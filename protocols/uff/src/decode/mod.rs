@@ -3,7 +3,7 @@
 use crate::encode::{ByteOrder, Precision};
 use crate::error::{DecodeError, Location, Malformed, excerpt};
 use crate::fortran::{columns, parse_int, trim};
-use crate::model::{FunctionHeader, Node, OtherDataset, UffRecord};
+use crate::model::{FunctionHeader, FunctionType, Node, OtherDataset, UffRecord};
 
 /// The decoder's bounds on hostile input.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -54,7 +54,7 @@ enum State {
     /// After an opening delimiter: expecting the identifier line (dataset number, `b` for binary).
     Identifier,
     Units {
-        record1: Option<(u32, String, u32)>,
+        record1: Option<(u32, String, Option<u32>)>,
         factors: Vec<f64>,
     },
     Nodes {
@@ -155,9 +155,15 @@ pub struct UffDecoder {
     lines: u64,
     /// Opening delimiters met: the current dataset's ordinal.
     record: u64,
+    /// The line of the current (or last) dataset's opening delimiter.
+    opened_at: u64,
     dataset_number: Option<u32>,
     /// Discarding the rest of an overlong line up to its line end.
     overlong: bool,
+    /// Whether the file's line ends are a lone `\r` (learnt at its first line end).
+    cr_only: Option<bool>,
+    /// The function types (codes) of datasets 58 to decode; others are stepped over after record 6. All if `None`.
+    function_types: Option<Vec<u32>>,
     truncation_reported: bool,
     state: State,
 }
@@ -183,11 +189,23 @@ impl UffDecoder {
             eof: false,
             lines: 0,
             record: 0,
+            opened_at: 0,
             dataset_number: None,
             overlong: false,
+            cr_only: None,
+            function_types: None,
             truncation_reported: false,
             state: State::Between { garbage: false },
         }
+    }
+
+    /// This decoder, decoding only the datasets 58 and 58b of these function types (record 6, field 1): the others
+    /// are stepped over as soon as their function type is read, before any other field is checked, and given as
+    /// [`UffRecord::Other`] with their [`OtherDataset::function_type`]. An importer takes this so that a record it does
+    /// not use (a coherence, a PSD with an uneven abscissa) cannot fail it.
+    pub fn only_functions(mut self, types: &[FunctionType]) -> Self {
+        self.function_types = Some(types.iter().map(|t| t.code()).collect());
+        self
     }
 
     /// Feeds the next bytes of the file. Bytes pushed after [`finish`](Self::finish) are ignored.
@@ -234,6 +252,12 @@ impl UffDecoder {
         std::iter::from_fn(move || self.poll())
     }
 
+    /// The line (from 1) of the opening delimiter of the dataset being read, or of the last one [`poll`](Self::poll)
+    /// returned: record `r` of a dataset 58 (ID line 1 is record 1) is on line `opened_line() + 1 + r`.
+    pub fn opened_line(&self) -> u64 {
+        self.opened_at
+    }
+
     /// Bytes pushed and not yet decoded.
     pub fn buffered_len(&self) -> usize {
         self.buf.len() - self.pos
@@ -266,26 +290,46 @@ impl UffDecoder {
         Step::Emit(Err(self.error(kind)))
     }
 
-    /// The next complete line without its line end (`\n` or `\r\n`).
+    /// The next complete line without its line end: `\n`, `\r\n` or `\r` alone (writers on old Macs and some
+    /// DAQ software). Whether a `\r` is followed by a `\n` that belongs to it is learnt at the file's first line end:
+    /// in a CR-only file a `\n` after a `\r` can be the first byte of 58b binary data.
     fn next_line(&mut self) -> Line {
         loop {
             let max = self.limits.max_line_bytes;
+            let cr_only = self.cr_only;
             let available = self.available();
-            match available.iter().position(|&b| b == b'\n') {
+            match available.iter().position(|&b| b == b'\n' || b == b'\r') {
                 Some(end) => {
-                    let overlong = self.overlong || end > max + 1;
-                    let mut line = if overlong { Vec::new() } else { available[..end].to_vec() };
-                    if line.last() == Some(&b'\r') {
-                        line.pop();
+                    let ending = match (available[end], available.get(end + 1)) {
+                        (b'\r', Some(b'\n')) if cr_only != Some(true) => 2,
+                        (b'\r', None) if cr_only != Some(true) && !self.eof => {
+                            // The `\n` of a CRLF may be in the next push: wait for it, holding at most the line.
+                            if end > max {
+                                self.consume(end);
+                                if !self.overlong {
+                                    self.overlong = true;
+                                    self.lines += 1;
+                                    return Line::TooLong;
+                                }
+                            }
+                            return Line::Wait;
+                        }
+                        _ => 1,
+                    };
+                    let lone_cr = available[end] == b'\r' && ending == 1;
+                    let overlong = self.overlong || end > max;
+                    let line = if overlong { Vec::new() } else { available[..end].to_vec() };
+                    if cr_only.is_none() {
+                        self.cr_only = Some(lone_cr);
                     }
-                    self.consume(end + 1);
+                    self.consume(end + ending);
                     self.lines += 1;
                     if self.overlong {
                         // The rest of a line already reported.
                         self.overlong = false;
                         continue;
                     }
-                    if overlong || line.len() > max {
+                    if overlong {
                         return Line::TooLong;
                     }
                     return Line::Text(line);
@@ -295,7 +339,7 @@ impl UffDecoder {
                     self.consume(n);
                     return Line::Wait;
                 }
-                None if available.len() > max + 1 => {
+                None if available.len() > max => {
                     let n = available.len();
                     self.consume(n);
                     self.overlong = true;
@@ -304,10 +348,7 @@ impl UffDecoder {
                     return Line::TooLong;
                 }
                 None if self.eof && !available.is_empty() => {
-                    let mut line = available.to_vec();
-                    if line.last() == Some(&b'\r') {
-                        line.pop();
-                    }
+                    let line = available.to_vec();
                     let n = available.len();
                     self.consume(n);
                     self.lines += 1;
@@ -410,6 +451,7 @@ impl UffDecoder {
                     Step::Again
                 } else if parse_int(columns(&line, 0, 6)).is_some() {
                     // The `-1` that ended the skip opened this dataset.
+                    self.opened_at = self.lines.saturating_sub(1);
                     self.record += 1;
                     self.dataset_number = None;
                     self.step_identifier(line)
@@ -425,6 +467,7 @@ impl UffDecoder {
                 if is_delimiter {
                     // The delimiter before was a closing one (of a dataset skipped as garbage) or opened an empty
                     // dataset: this one opens the next.
+                    self.opened_at = self.lines;
                     self.state = State::Identifier;
                     return Step::Again;
                 }
@@ -472,6 +515,12 @@ impl UffDecoder {
                     return Step::Emit(Err(self.error(Malformed::Unexpected { expected, found: excerpt(&line) })));
                 }
                 lines.push(line);
+                if lines.len() == 6
+                    && let Some(skip) = self.skipped_function(binary, &lines[5])
+                {
+                    self.state = skip;
+                    return Step::Again;
+                }
                 if lines.len() < 11 {
                     self.state = State::FunctionHeader { binary, lines };
                     return Step::Again;
@@ -488,6 +537,7 @@ impl UffDecoder {
     }
 
     fn open(&mut self) {
+        self.opened_at = self.lines;
         self.record += 1;
         self.dataset_number = None;
         self.state = State::Identifier;
@@ -550,7 +600,8 @@ impl UffDecoder {
         } else {
             None
         };
-        let other = OtherDataset { dataset_number: number, binary, line: self.lines.saturating_sub(1) };
+        let other =
+            OtherDataset { dataset_number: number, binary, line: self.lines.saturating_sub(1), function_type: None };
         self.state = match (number, binary_header) {
             (58, binary) => State::FunctionHeader { binary, lines: Vec::with_capacity(11) },
             (164 | 2411, Some(_)) => {
@@ -562,6 +613,23 @@ impl UffDecoder {
             (_, None) => State::OtherAscii { other },
         };
         Step::Again
+    }
+
+    /// The state that steps over a dataset 58 whose record 6 (`record6`) gives a function type this decoder does
+    /// not decode, or `None` to decode it (or when the type cannot be read: the header's check reports that).
+    fn skipped_function(&self, binary: Option<BinaryHeader>, record6: &[u8]) -> Option<State> {
+        let wanted = self.function_types.as_ref()?;
+        let code = u32::try_from(parse_int(columns(record6, 0, 5))?).ok()?;
+        if wanted.contains(&code) {
+            return None;
+        }
+        let line = self.lines.saturating_sub(7);
+        let other = OtherDataset { dataset_number: 58, binary: binary.is_some(), line, function_type: Some(code) };
+        Some(match binary {
+            // Six of the ASCII lines the identifier line counts are read.
+            Some(b) => State::OtherBinary { other, ascii_lines: b.ascii_lines.saturating_sub(6), bytes: b.bytes },
+            None => State::OtherAscii { other },
+        })
     }
 
     /// Format (I6,1A1,I6,I6,I12,I12,I6,I6,I12,I12): number, `b`, byte order, floating-point format, ASCII lines

@@ -1,0 +1,463 @@
+//! The import's first pass: what the files hold (units, nodes, every response's header, what is skipped), and the
+//! plan drawn from it (the grid, each key's record, the actuators' mapping, the units' conversion).
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use metaplate_core::grid::{GridSpec, SNAP_TOLERANCE_M, snap_to_grid};
+use metaplate_uff::{AxisCharacteristics, FunctionType, UffDecoder, UffRecord, Units164};
+
+use crate::error::{InterchangeError, refuse};
+use crate::lattice::{self, Frame};
+use crate::quantity::{self, Denominator, OrdinateQuantity};
+use crate::{IdLines, ImportOptions};
+
+/// Bytes read from a file at a time.
+const READ_CHUNK: usize = 1 << 20;
+
+/// The function types an import reads; records of every other type are stepped over unread.
+pub(crate) const RESPONSE_TYPES: [FunctionType; 2] = [FunctionType::TimeResponse, FunctionType::FrequencyResponse];
+
+/// Spacing given to the grid of a single point, m (a grid needs one; nothing measures it).
+pub const ONE_POINT_SPACING_M: f64 = 1e-3;
+
+/// A record an import stepped over, and where.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SkippedRecord {
+    /// The file, as given.
+    pub file: String,
+    /// The record's ordinal in the file, from 1.
+    pub record: u64,
+    /// The line of its opening delimiter.
+    pub line: u64,
+    /// What it is: `dataset 2412 (elements)`, `dataset 58, function type 6 (coherence)`.
+    pub what: String,
+}
+
+/// Which reference degree of freedom an actuator number stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub struct ActuatorRef {
+    /// The dataset's actuator number.
+    pub actuator: u16,
+    /// The responses' reference node label (any integer: LMS writes -1 for none).
+    pub reference_node: i64,
+    /// The reference direction (0 scalar, ±1..±6).
+    pub direction: i8,
+}
+
+/// One response of the files, as the first pass saw it.
+pub(crate) struct Seen {
+    /// File index and the record's ordinal in it.
+    pub(crate) at: (usize, u64),
+    /// The line of its opening delimiter.
+    pub(crate) line: u64,
+    pub(crate) function_type: FunctionType,
+    pub(crate) response: i64,
+    pub(crate) reference: (i64, i8),
+    /// The metaplate key of ID line 1, if any.
+    pub(crate) key: Option<(u32, u16)>,
+    pub(crate) ordinate: OrdinateQuantity,
+    pub(crate) denominator: Denominator,
+    /// Records 9 and 10 as read.
+    pub(crate) axes: Box<(AxisCharacteristics, AxisCharacteristics)>,
+}
+
+/// What the first pass gathers.
+#[derive(Default)]
+pub(crate) struct Survey {
+    pub(crate) units: Option<Units164>,
+    /// Node positions in the file's length unit.
+    pub(crate) nodes: HashMap<i64, [f64; 3]>,
+    pub(crate) functions: Vec<Seen>,
+    /// ID lines of the first response.
+    pub(crate) first_ids: Option<[String; 5]>,
+    pub(crate) skipped: Vec<SkippedRecord>,
+}
+
+/// Decodes each file in turn (responses only), handing every record to `visit` with the file's index, the record's
+/// ordinal and the line of its opening delimiter.
+pub(crate) fn for_each_record(
+    files: &[PathBuf],
+    mut visit: impl FnMut(usize, u64, u64, UffRecord) -> Result<(), InterchangeError>,
+) -> Result<(), InterchangeError> {
+    let mut chunk = vec![0u8; READ_CHUNK];
+    for (f, path) in files.iter().enumerate() {
+        let mut file = File::open(path)
+            .map_err(|source| InterchangeError::File { what: format!("opening {}", path.display()), source })?;
+        let mut decoder = UffDecoder::new().only_functions(&RESPONSE_TYPES);
+        let mut ordinal = 0u64;
+        loop {
+            let n = file
+                .read(&mut chunk)
+                .map_err(|source| InterchangeError::File { what: format!("reading {}", path.display()), source })?;
+            if n == 0 {
+                decoder.finish();
+            } else {
+                decoder.push(&chunk[..n]);
+            }
+            while let Some(record) = decoder.poll() {
+                let record = record
+                    .map_err(|source| InterchangeError::Malformed { file: path.display().to_string(), source })?;
+                ordinal += 1;
+                visit(f, ordinal, decoder.opened_line(), record)?;
+            }
+            if n == 0 {
+                break;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The specification's name of a function type code.
+fn function_type_name(code: u32) -> &'static str {
+    match code {
+        0 => "general or unknown",
+        2 => "auto spectrum",
+        3 => "cross spectrum",
+        5 => "transmissibility",
+        6 => "coherence",
+        7 => "auto correlation",
+        8 => "cross correlation",
+        9 => "power spectral density",
+        10 => "energy spectral density",
+        11 => "probability density function",
+        12 => "spectrum",
+        18 => "mode indicator function",
+        21 => "partial coherence",
+        23 => "eigenvector",
+        24 => "shock response spectrum",
+        26 => "multiple coherence",
+        27 => "order function",
+        _ => "not a response",
+    }
+}
+
+/// What a dataset number holds, for the list of skipped records.
+fn dataset_name(number: u32) -> &'static str {
+    match number {
+        15 => "nodes, single precision",
+        18 => "coordinate systems",
+        55 => "data at nodes (mode shapes)",
+        82 => "trace lines",
+        151 => "header",
+        1858 => "qualifiers",
+        2400 => "model header",
+        2412 => "elements",
+        2414 => "analysis data",
+        2420 => "coordinate systems",
+        2467 => "groups",
+        _ => "not read",
+    }
+}
+
+/// `FILE record N (dataset 58 from line L)`: a response record, for messages.
+pub(crate) fn record_at(files: &[PathBuf], seen: &Seen) -> String {
+    format!("{} record {} (dataset 58 from line {})", files[seen.at.0].display(), seen.at.1, seen.line)
+}
+
+/// The first pass: units, nodes, every response's header, and what is skipped.
+pub(crate) fn survey(files: &[PathBuf], options: &ImportOptions) -> Result<Survey, InterchangeError> {
+    let mut survey = Survey::default();
+    for_each_record(files, |f, ordinal, line, record| {
+        match record {
+            UffRecord::Units(units) => {
+                if survey.units.as_ref().is_some_and(|u| *u != units) {
+                    refuse!(
+                        "{} record {ordinal} (dataset 164 from line {line}) gives other units than an earlier dataset \
+                         164: one set of units is accepted across the files",
+                        files[f].display()
+                    );
+                }
+                survey.units = Some(units);
+            }
+            UffRecord::Nodes(nodes) => {
+                for node in nodes.nodes {
+                    survey.nodes.insert(i64::from(node.label), node.position_m);
+                }
+            }
+            UffRecord::Function(function) => {
+                let h = &function.header;
+                if survey.first_ids.is_none() {
+                    survey.first_ids = Some(h.id_lines.clone());
+                }
+                survey.functions.push(Seen {
+                    at: (f, ordinal),
+                    line,
+                    function_type: h.function_type,
+                    response: h.response.node,
+                    reference: (h.reference.node, h.reference.direction),
+                    key: IdLines::parse_key(&h.id_lines[0]),
+                    // Placeholders until dataset 164 is known (it may come after the responses).
+                    ordinate: OrdinateQuantity::Other { name: String::new() },
+                    denominator: Denominator::Unused,
+                    axes: Box::new((h.ordinate.clone(), h.denominator.clone())),
+                });
+            }
+            UffRecord::Other(other) => {
+                let what = match other.function_type {
+                    Some(code) => format!("dataset 58, function type {code} ({})", function_type_name(code)),
+                    None => format!("dataset {} ({})", other.dataset_number, dataset_name(other.dataset_number)),
+                };
+                survey.skipped.push(SkippedRecord {
+                    file: files[f].display().to_string(),
+                    record: ordinal,
+                    line,
+                    what,
+                });
+            }
+        }
+        Ok(())
+    })?;
+    for seen in &mut survey.functions {
+        let (ordinate, denominator) = &*seen.axes;
+        seen.ordinate = quantity::ordinate(ordinate, survey.units.as_ref());
+        let per_newton = matches!(seen.ordinate, OrdinateQuantity::Motion { per_newton: true, .. });
+        seen.denominator = quantity::denominator(denominator, survey.units.as_ref(), per_newton);
+        if let OrdinateQuantity::Other { name } = &seen.ordinate
+            && !options.accept_unknown_quantity
+        {
+            refuse!(
+                "{}, line {}, record 9 (ordinate data characteristics): the ordinate is {name}; metaplate imports \
+                 velocity, and acceleration or displacement converted to it (data types 11, 12, 8, or 0 or 1 with a \
+                 units label such as m/s, m/s², g, mm); --accept-unknown-quantity imports it as declared unknown",
+                record_at(files, seen),
+                seen.line + 10
+            );
+        }
+    }
+    Ok(survey)
+}
+
+/// What the second pass imports.
+pub(crate) struct Plan {
+    pub(crate) grid: GridSpec,
+    /// (file index, record ordinal) of the function imported for each key.
+    pub(crate) by_at: HashMap<(usize, u64), (u32, u16)>,
+    pub(crate) grid_from: String,
+    pub(crate) actuators: Vec<ActuatorRef>,
+    /// Node -> position in the grid's frame, m (the responses'; every node's with the metaplate grid).
+    pub(crate) placed: HashMap<i64, (f64, f64)>,
+    /// The fitted lattice's frame, to place other nodes (the references) in it.
+    pub(crate) frame: Option<Frame>,
+}
+
+/// The grid, the actuators and each key's function: one per key, the time response, else the FRF.
+pub(crate) fn plan(
+    files: &[PathBuf],
+    survey: &Survey,
+    first_ids: &[String; 5],
+    options: &ImportOptions,
+    positions_m: &HashMap<i64, [f64; 3]>,
+) -> Result<Plan, InterchangeError> {
+    let metaplate_grid = IdLines::parse_grid(&first_ids[1]).filter(|_| !options.grid_from_nodes);
+    let Placement { grid, keys, grid_from, actuators, placed, frame } = match metaplate_grid {
+        Some(grid) if survey.functions.iter().all(|s| s.key.is_some()) => {
+            let keys: Vec<(u32, u16)> = survey.functions.iter().filter_map(|s| s.key).collect();
+            let mut actuators = BTreeSet::new();
+            for (seen, key) in survey.functions.iter().zip(&keys) {
+                actuators.insert(ActuatorRef {
+                    actuator: key.1,
+                    reference_node: seen.reference.0,
+                    direction: seen.reference.1,
+                });
+            }
+            Placement {
+                grid,
+                keys,
+                grid_from: "metaplate ID lines".to_owned(),
+                actuators: actuators.into_iter().collect(),
+                placed: positions_m.iter().map(|(&label, p)| (label, (p[0], p[1]))).collect(),
+                frame: None,
+            }
+        }
+        _ => keys_from_nodes(files, survey, positions_m)?,
+    };
+    let mut chosen: BTreeMap<(u32, u16), usize> = BTreeMap::new();
+    let rank = |t: FunctionType| match t {
+        FunctionType::TimeResponse => 0,
+        _ => 1,
+    };
+    for (i, (seen, key)) in survey.functions.iter().zip(&keys).enumerate() {
+        let r = rank(seen.function_type);
+        match chosen.get(key) {
+            Some(&j) if rank(survey.functions[j].function_type) == r => {
+                refuse!(
+                    "point {} actuator {} has two responses of one type: {} and {} (one response per response node \
+                     and reference node and direction is accepted)",
+                    key.0,
+                    key.1,
+                    record_at(files, &survey.functions[j]),
+                    record_at(files, seen)
+                );
+            }
+            Some(&j) if rank(survey.functions[j].function_type) < r => {}
+            _ => {
+                chosen.insert(*key, i);
+            }
+        }
+    }
+    let by_at = chosen.iter().map(|(key, &i)| (survey.functions[i].at, *key)).collect();
+    Ok(Plan { grid, by_at, grid_from, actuators, placed, frame })
+}
+
+/// The grid placed from the response nodes' positions (m), each function's key, and the actuators: the distinct
+/// (reference node, direction) pairs of the responses, numbered from 0 in ascending order.
+fn keys_from_nodes(
+    files: &[PathBuf],
+    survey: &Survey,
+    positions_m: &HashMap<i64, [f64; 3]>,
+) -> Result<Placement, InterchangeError> {
+    let responses: BTreeSet<i64> = survey.functions.iter().map(|s| s.response).collect();
+    let references: BTreeSet<(i64, i8)> = survey.functions.iter().map(|s| s.reference).collect();
+    if references.len() > usize::from(u16::MAX) + 1 {
+        refuse!("{} reference degrees of freedom: more actuators than a dataset numbers (65536)", references.len());
+    }
+    let mut labels = Vec::with_capacity(responses.len());
+    let mut positions = Vec::with_capacity(responses.len());
+    for &label in &responses {
+        let Some(p) = positions_m.get(&label) else {
+            let Some(seen) = survey.functions.iter().find(|s| s.response == label) else { continue };
+            refuse!(
+                "{}, line {}, record 6 (DOF identification), response node: node {label} has no position: no dataset \
+                 2411 lists it; give the positions with --nodes FILE (CSV columns node,x_m,y_m and optionally z_m)",
+                record_at(files, seen),
+                seen.line + 7
+            )
+        };
+        labels.push(label);
+        positions.push(*p);
+    }
+    let (grid, indices, grid_from, placed, frame) = place(&positions)?;
+    let placed: HashMap<i64, (f64, f64)> = labels.iter().copied().zip(placed).collect();
+    let point_of: HashMap<i64, u32> =
+        labels.iter().zip(&indices).map(|(&label, &i)| (label, u32::try_from(i).unwrap_or(u32::MAX))).collect();
+    let actuators: Vec<ActuatorRef> = references
+        .iter()
+        .enumerate()
+        .map(|(a, &(reference_node, direction))| ActuatorRef {
+            actuator: u16::try_from(a).unwrap_or(u16::MAX),
+            reference_node,
+            direction,
+        })
+        .collect();
+    let actuator_of: HashMap<(i64, i8), u16> =
+        actuators.iter().map(|a| ((a.reference_node, a.direction), a.actuator)).collect();
+    let keys = survey
+        .functions
+        .iter()
+        .map(|s| (point_of.get(&s.response).copied().unwrap_or(0), actuator_of.get(&s.reference).copied().unwrap_or(0)))
+        .collect();
+    Ok(Placement { grid, keys, grid_from, actuators, placed, frame })
+}
+
+/// The grid of the response points (m, 3-D), each point's flat index and in-grid position, where the grid came
+/// from, and the lattice's frame when the points were fitted in 3-D: one point; else points in a plane of constant
+/// z on an axis-aligned grid as they are ([`snap_to_grid`]); else the lattice of their plane
+/// ([`crate::lattice::fit`]).
+#[allow(clippy::type_complexity)] // One caller, which takes the tuple apart at once.
+fn place(
+    points: &[[f64; 3]],
+) -> Result<(GridSpec, Vec<usize>, String, Vec<(f64, f64)>, Option<Frame>), InterchangeError> {
+    let flat: Vec<(f64, f64)> = points.iter().map(|p| (p[0], p[1])).collect();
+    if points.windows(2).all(|w| w[0] == w[1]) {
+        let (x, y) = flat.first().copied().unwrap_or_default();
+        let grid = GridSpec { nx: 1, ny: 1, spacing_m: ONE_POINT_SPACING_M, origin_x_m: x, origin_y_m: y };
+        return Ok((grid, vec![0; points.len()], "one point".to_owned(), flat, None));
+    }
+    let z_range = points.iter().map(|p| p[2]).fold(f64::NEG_INFINITY, f64::max)
+        - points.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+    let snap_error = if z_range <= SNAP_TOLERANCE_M {
+        match snap_to_grid(&flat) {
+            Ok((grid, indices)) => return Ok((grid, indices, "nodes".to_owned(), flat, None)),
+            Err(e) => e.to_string(),
+        }
+    } else {
+        format!("they span {:.4} mm in z", z_range * 1e3)
+    };
+    match lattice::fit(points) {
+        Ok(lattice) => {
+            let grid_from = lattice.describe();
+            Ok((lattice.grid, lattice.indices, grid_from, lattice.in_plane_m, Some(lattice.frame)))
+        }
+        Err(why) => refuse!(
+            "the {} response nodes are not a grid as they are ({snap_error}) nor a regular lattice in their plane \
+             ({why}): scattered points are not imported yet (a dataset holds a lattice); a regular scan grid, or \
+             --nodes placing the points on one, is accepted",
+            points.len()
+        ),
+    }
+}
+
+/// Where the responses go: the grid, each function's key, where the grid came from, the actuators.
+struct Placement {
+    grid: GridSpec,
+    keys: Vec<(u32, u16)>,
+    grid_from: String,
+    actuators: Vec<ActuatorRef>,
+    /// Response node -> position in the grid's frame, m.
+    placed: HashMap<i64, (f64, f64)>,
+    /// The fitted lattice's frame, if the points were fitted in 3-D.
+    frame: Option<Frame>,
+}
+
+/// Node positions from a CSV file: a header naming the columns `node`, `x_m`, `y_m` and optionally `z_m` (in any
+/// order, other columns ignored), then one node per line; metres.
+///
+/// # Errors
+/// An unreadable file; [`InterchangeError::Refused`] naming the line and column of what is not a node label or a
+/// finite number, a missing column, or a node listed twice.
+pub fn read_nodes_csv(path: &Path) -> Result<HashMap<i64, [f64; 3]>, InterchangeError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| InterchangeError::File { what: format!("reading {}", path.display()), source })?;
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = lines.next() else {
+        refuse!("{}: empty; expected a header node,x_m,y_m[,z_m]", path.display())
+    };
+    let names: Vec<String> = header.split(',').map(|c| c.trim().to_ascii_lowercase()).collect();
+    let column = |name: &str| names.iter().position(|c| c == name);
+    let (Some(node), Some(x), Some(y)) = (column("node"), column("x_m"), column("y_m")) else {
+        refuse!(
+            "{} line 1: the header {header:?} lacks a column node, x_m or y_m (accepted: node,x_m,y_m[,z_m])",
+            path.display()
+        )
+    };
+    let z = column("z_m");
+    let mut nodes = HashMap::new();
+    for (i, line) in lines {
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let cell = |c: usize, name: &str| -> Result<&str, InterchangeError> {
+            match cells.get(c) {
+                Some(v) => Ok(v),
+                None => refuse!("{} line {}: no column {name}", path.display(), i + 1),
+            }
+        };
+        let number = |c: usize, name: &str| -> Result<f64, InterchangeError> {
+            let v = cell(c, name)?;
+            match v.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => {
+                    refuse!("{} line {}, column {name}: {v:?} is not a finite number of metres", path.display(), i + 1)
+                }
+            }
+        };
+        let label = cell(node, "node")?;
+        let Ok(label) = label.parse::<i64>() else {
+            refuse!("{} line {}, column node: {label:?} is not a node label (an integer)", path.display(), i + 1)
+        };
+        let position = [
+            number(x, "x_m")?,
+            number(y, "y_m")?,
+            match z {
+                Some(z) => number(z, "z_m")?,
+                None => 0.0,
+            },
+        ];
+        if nodes.insert(label, position).is_some() {
+            refuse!("{} line {}: node {label} is listed twice", path.display(), i + 1);
+        }
+    }
+    Ok(nodes)
+}
