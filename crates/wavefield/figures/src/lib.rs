@@ -28,6 +28,8 @@
 //! - [`focus_snapshots`], [`focus_animation`] (the focusing in time as an animated PNG, APNG via `png`) and
 //!   [`pixel_area_map`]: maps over the plate.
 //! - [`pod_energy`], [`singular_value_energy`], [`condition_numbers`], [`driven_response`]: line figures.
+//! - [`band_structure`]: a unit cell's band diagram with the folded A0, phase velocity and wavelength against
+//!   frequency (the paper's Fig. 2B-D; `metaplate design band --figures`).
 //! - [`tradeoff`]: time per point against median Green's-function error, every protocol a labelled point, the Pareto
 //!   front joined.
 //! - [`status_map_svg`], [`snr_map_svg`]: the grid by point status, or by SNR on a fixed scale, as inline SVG (the
@@ -54,8 +56,8 @@ pub use accuracy::{AccuracyBar, accuracy};
 pub use grid_svg::{CellStatus, snr_map_svg, status_map_svg};
 pub use maps::{PlateOverlay, focus_animation, focus_snapshots, pixel_area_map};
 pub use plots::{
-    Curve, SingularValueSeries, WavelengthReferences, WavelengthSeries, condition_numbers, driven_response, pod_energy,
-    singular_value_energy, wavelength,
+    BandFigure, Curve, SingularValueSeries, WavelengthReferences, WavelengthSeries, band_structure, condition_numbers,
+    driven_response, pod_energy, singular_value_energy, wavelength,
 };
 pub use render::{FigureError, Written};
 pub use stimuli::{PixelRole, PixelTrace, StimulusPanel, stimuli};

@@ -1,4 +1,4 @@
-//! Line figures: wavelength, POD energy, singular-value energy, condition numbers, driven response.
+//! Line figures: wavelength, POD energy, singular-value energy, condition numbers, driven response, band structure.
 
 use std::path::Path;
 
@@ -79,6 +79,8 @@ enum Look {
     Marks,
     /// A dotted grey line (a limit).
     Limit,
+    /// Small filled dots, no line (samples of a relation that is not a function of x, such as a band's c(f)).
+    Dots,
 }
 
 /// One chart: axes, title and series. With `log_y` the y values are plotted as their base-10 logarithm and labelled
@@ -163,7 +165,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
             Look::Limit => RGBColor(140, 140, 140),
             Look::Dashed => BLACK,
             Look::Marks => next(&mut marks),
-            Look::Measured(_) => next(&mut measured),
+            Look::Measured(_) | Look::Dots => next(&mut measured),
         };
         match &s.look {
             Look::Measured(in_range) => {
@@ -201,6 +203,13 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
                         .label(s.label.clone())
                         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 8, y)], colour.stroke_width(width)));
                 }
+            }
+            Look::Dots => {
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))
+                    .map_err(|e| e.to_string())?
+                    .label(s.label.clone())
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 3, colour.filled()));
             }
             Look::Marks => {
                 chart
@@ -417,6 +426,88 @@ pub fn driven_response(dir: &Path, name: &str, series: &[Curve]) -> Result<Writt
         series: series.iter().map(|c| plain(&c.label, c.points.clone())).collect(),
     };
     save(&Stack { name: "driven response", panels: vec![panel] }, dir, name, (900, 600))
+}
+
+/// A unit cell's band structure (paper, Fig. 2B-D), each curve's points in plain SI units.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BandFigure {
+    /// Title over the band diagram (the design's name).
+    pub title: String,
+    /// The branches, (path position in units of pi / a, frequency in Hz), one curve per mode.
+    pub branches: Vec<Curve>,
+    /// The homogeneous plate's A0 folded into the zone, same axes: dashed.
+    pub a0_folded: Vec<Curve>,
+    /// The clamped cell's resonator mode, Hz: a dotted horizontal line.
+    pub resonator_hz: Option<f64>,
+    /// Phase velocity, (frequency in Hz, m/s), one curve per branch shown.
+    pub phase_velocity: Vec<Curve>,
+    /// Wavelength, (frequency in Hz, m), one curve per branch shown.
+    pub wavelength: Vec<Curve>,
+    /// The analytic A0's phase velocity and wavelength against frequency (Hz, m/s and Hz, m): dashed.
+    pub a0_phase_velocity: Option<Curve>,
+    /// See `a0_phase_velocity`.
+    pub a0_wavelength: Option<Curve>,
+}
+
+/// A band structure in three stacked panels (paper, Fig. 2B-D): frequency along Gamma-X-M-Gamma with the folded A0
+/// and the resonator mode, phase velocity against frequency, wavelength (cm) against frequency; the branches as
+/// dots. Writes `<dir>/<name>.png` and `.svg`.
+///
+/// # Errors
+/// As [`wavelength`].
+pub fn band_structure(dir: &Path, name: &str, figure: &BandFigure) -> Result<Written, FigureError> {
+    check_nonempty("band structure", &figure.branches)?;
+    let dots = |c: &Curve, scale: f64| Series {
+        label: c.label.clone(),
+        points: c.points.iter().map(|&(x, y)| (x, y * scale)).collect(),
+        bars: Vec::new(),
+        look: Look::Dots,
+    };
+    let dashed = |c: &Curve, scale: f64, label: bool| Series {
+        label: if label { c.label.clone() } else { String::new() },
+        points: c.points.iter().map(|&(x, y)| (x, y * scale)).collect(),
+        bars: Vec::new(),
+        look: Look::Dashed,
+    };
+    let mut bands: Vec<Series> = figure.branches.iter().map(|c| dots(c, 1.0)).collect();
+    bands.extend(figure.a0_folded.iter().enumerate().map(|(i, c)| dashed(c, 1.0, i == 0)));
+    if let Some(f_n) = figure.resonator_hz {
+        let xs = figure.branches.iter().flat_map(|c| c.points.iter().map(|p| p.0));
+        let (x0, x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+        if x0.is_finite() {
+            let label = format!("clamped-cell resonator mode {f_n:.0} Hz");
+            bands.push(Series { label, points: vec![(x0, f_n), (x1, f_n)], bars: Vec::new(), look: Look::Limit });
+        }
+    }
+    let with_a0 = |curves: &[Curve], a0: &Option<Curve>, scale: f64| {
+        let mut out: Vec<Series> = curves.iter().map(|c| dots(c, scale)).collect();
+        out.extend(a0.iter().map(|c| dashed(c, scale, true)));
+        out
+    };
+    let panels = vec![
+        Panel {
+            title: figure.title.clone(),
+            x_desc: "wave vector along Γ-X-M-Γ (X at 1, M at 2, Γ at 3.41; π/a)",
+            y_desc: "frequency (Hz)",
+            log_y: false,
+            series: bands,
+        },
+        Panel {
+            title: "Phase velocity".to_owned(),
+            x_desc: "frequency (Hz)",
+            y_desc: "phase velocity (m/s)",
+            log_y: true,
+            series: with_a0(&figure.phase_velocity, &figure.a0_phase_velocity, 1.0),
+        },
+        Panel {
+            title: "Wavelength".to_owned(),
+            x_desc: "frequency (Hz)",
+            y_desc: "wavelength (cm)",
+            log_y: true,
+            series: with_a0(&figure.wavelength, &figure.a0_wavelength, 100.0),
+        },
+    ];
+    save(&Stack { name: "band structure", panels }, dir, name, (900, 1500))
 }
 
 #[cfg(test)]

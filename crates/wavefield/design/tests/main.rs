@@ -1,0 +1,10 @@
+//! The design crate's tests: the band structure against known answers (the analytic A0, a plane-wave expansion of
+//! point spring-mass resonators, the paper's Fig. 2 figures), and design files.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
+
+mod files;
+mod homogeneous;
+mod paper;
+mod pwe;
+mod spring_mass;
