@@ -1,45 +1,54 @@
-//! [`DaqDriver`]: the [`Daq`] capability on metaplate's DAQ bulk protocol, over any [`BulkTransport`].
+//! [`U6Driver`]: the [`Daq`] capability on a LabJack U6, over any [`BulkTransport`].
 //!
-//! Every command is one exchange: send the frame, then read IN transfers until the reply naming the command's
-//! sequence number arrives. Replies to other sequence numbers are stale (from an attempt that timed out) and are
-//! dropped. An attempt that times out is retried, at most [`DriverSettings::retries`] times; before each retry the
-//! driver drains what the device still sends, so a late reply cannot be taken for the new one. Sample packets and
-//! notifications that arrive while a command waits are queued for [`Daq::read_block`].
+//! Commands are single exchanges on the command endpoints (User's Guide section 5.2): send the packet, read
+//! responses until the one to this command arrives. A response to another command is stale (from an attempt
+//! that timed out) and is dropped; `B8 B8` (the device saw a bad checksum) or a corrupted response resends the
+//! command. An attempt that times out is retried, at most [`DriverSettings::retries`] times, after draining the
+//! response endpoint. Stream data is read from the stream endpoint only by [`Daq::read_block`].
+//!
+//! Opening reads the identity (ConfigU6: serial number, firmware, U6 or U6-Pro) and the calibration constants
+//! (ReadCal blocks 0-3), and stops a stream an earlier session may have left running (as LabJack's
+//! `u6Stream.c` example does before configuring).
 
-use std::collections::VecDeque;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use metaplate_core::daq::{BlockIntegrity, Daq, DaqBlock, DaqConfig, DaqError, DaqIdentity};
-use metaplate_daq_protocol::{
-    self as proto, ChannelConfig, Configure, DeviceInfo, DeviceMessage, ErrorCode, ErrorReport, HostCommand,
-    HostDecoder, SamplePacket, StopReason, StreamEvent, StreamTracker, encode,
+use metaplate_core::daq::{Daq, DaqBlock, DaqConfig, DaqError, DaqIdentity};
+use metaplate_u6_protocol::{
+    Calibration, Command, DeviceInfo, Errorcode, PRODUCT_ID, Response, ResponseBody, ScanAssembler, StreamConfig,
+    StreamDecoder, StreamStats, U6Error,
 };
 
+use crate::blocks::BlockBuilder;
+use crate::stream_config::to_stream_config;
 use crate::transport::{BulkTransport, TransportError};
 
-/// Timeouts and retry bounds of a [`DaqDriver`].
+/// Timeouts, retry bounds and stream settings of a [`U6Driver`].
 ///
 /// Valid range: every duration > 0 (a zero timeout makes every exchange time out), counts >= 1 except `retries`
-/// (0 = a single attempt).
+/// (0 = a single attempt); `resolution_index` 0-8.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DriverSettings {
-    /// How long one attempt of a command waits for its reply, and one read waits for samples.
+    /// How long one attempt of a command waits for its response, and one stream read for data.
     pub timeout: Duration,
-    /// Extra attempts after the first, for a command that timed out or stalled, and consecutive empty reads
+    /// Extra attempts after the first, for a command that timed out or stalled, and consecutive empty stream reads
     /// tolerated by [`Daq::read_block`].
     pub retries: u32,
-    /// How long a drain read waits before concluding the device has gone quiet.
+    /// How long a drain read waits before concluding an endpoint has gone quiet.
     pub drain_timeout: Duration,
-    /// The most IN transfers one drain reads (a streaming device never goes quiet).
+    /// The most IN transfers one drain reads per endpoint.
     pub max_drain_transfers: u32,
-    /// The most IN transfers one attempt reads while waiting for its reply (or one `read_block` for a fresh
-    /// packet), so that a device streaming without answering cannot hold the driver forever.
+    /// The most IN transfers one attempt reads while waiting for its response (or one `read_block` while
+    /// nothing but stale or corrupt data arrives).
     pub max_transfers_per_attempt: u32,
+    /// StreamConfig's ResolutionIndex (0: the default, 1).
+    pub resolution_index: u8,
+    /// StreamConfig's SettlingFactor (0: the U6 chooses).
+    pub settling_factor: u8,
 }
 
 impl Default for DriverSettings {
-    /// 1 s per attempt, 2 retries; drains of up to 64 transfers, 20 ms each; 4096 transfers per attempt (at 240
-    /// samples per packet and 24 kHz, 41 s of samples: far more than any device buffers before it answers).
+    /// 1 s per attempt, 2 retries; drains of up to 64 transfers, 20 ms each; 4096 transfers per attempt;
+    /// resolution index 0 and automatic settling (the guide's usual stream settings).
     fn default() -> Self {
         Self {
             timeout: Duration::from_secs(1),
@@ -47,6 +56,8 @@ impl Default for DriverSettings {
             drain_timeout: Duration::from_millis(20),
             max_drain_transfers: 64,
             max_transfers_per_attempt: 4096,
+            resolution_index: 0,
+            settling_factor: 0,
         }
     }
 }
@@ -54,41 +65,39 @@ impl Default for DriverSettings {
 /// What the driver has had to cope with since it was opened (for logs and tests).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct DriverStats {
-    /// Command attempts repeated after a timeout, stall or corrupted command.
+    /// Command attempts repeated after a timeout, stall or corrupted exchange.
     pub retries: u64,
-    /// Replies dropped because they answered an earlier attempt or nothing.
-    pub stale_replies: u64,
-    /// Frames the decoder rejected (corrupt bytes, CRC mismatches, unknown messages).
+    /// Responses dropped because they answered another command.
+    pub stale_responses: u64,
+    /// Responses and stream bytes the codec rejected (bad checksums, garbage, wrong lengths).
     pub decode_errors: u64,
     /// IN transfers read while draining.
     pub drained_transfers: u64,
     /// Successful reopens.
     pub reopens: u64,
+    /// The stream accounting of every acquisition so far (missed packets, auto-recovery, backlog).
+    pub stream: StreamStats,
 }
 
 /// The running acquisition, host side.
 #[derive(Debug)]
 struct Stream {
-    tracker: StreamTracker,
-    /// Losses seen since the last block returned (charged to the next one).
-    pending: BlockIntegrity,
-    /// A fault the device reported without `of_seq` (a `Stopped` follows it).
-    fault: Option<ErrorReport>,
+    decoder: StreamDecoder,
+    assembler: ScanAssembler,
+    blocks: BlockBuilder,
 }
 
-/// A DAQ that speaks metaplate's bulk protocol, behind transport `T`.
+/// A LabJack U6 behind transport `T`.
 #[derive(Debug)]
-pub struct DaqDriver<T: BulkTransport> {
+pub struct U6Driver<T: BulkTransport> {
     transport: T,
     settings: DriverSettings,
-    decoder: HostDecoder,
-    next_seq: u32,
     info: DeviceInfo,
     identity: DaqIdentity,
-    config: Option<Configure>,
+    calibration: Calibration,
+    /// The StreamConfig in force and the block length asked for.
+    config: Option<(StreamConfig, usize)>,
     stream: Option<Stream>,
-    /// Stream messages (samples, `Stopped`, faults) received while a command waited, in arrival order.
-    inbox: VecDeque<DeviceMessage>,
     stats: DriverStats,
 }
 
@@ -100,105 +109,60 @@ fn transport_error(e: TransportError) -> DaqError {
     }
 }
 
-fn device_error(report: &ErrorReport) -> DaqError {
-    DaqError::Device { code: i64::from(report.code.code()), detail: format!("{}: {}", report.code, report.detail) }
+fn device_error(command: &str, errorcode: Errorcode) -> DaqError {
+    DaqError::Device { code: i64::from(errorcode.0), detail: format!("{command} returned {errorcode}") }
 }
 
-fn protocol_error(e: proto::DaqError) -> DaqError {
+/// The typed error for a stream errorcode: the overflows (the U6's buffers, a scan overlapping the next, scans
+/// lost beyond what auto-recovery counts) as [`DaqError::Overrun`], others as [`DaqError::Device`].
+fn stream_error(packet_number: u8, errorcode: Errorcode) -> DaqError {
+    let detail = format!("stream packet {packet_number}: {errorcode}");
+    match errorcode.0 {
+        3 | 4 | 54 | 55 | 63 => DaqError::Overrun { detail },
+        _ => DaqError::Device { code: i64::from(errorcode.0), detail },
+    }
+}
+
+fn protocol_error(e: U6Error) -> DaqError {
     DaqError::Protocol { detail: e.to_string() }
 }
 
-fn unexpected(command: &str, reply: &DeviceMessage) -> DaqError {
-    DaqError::Protocol { detail: format!("unexpected reply to {command}: {reply:?}") }
-}
-
-/// The reply's sequence number, for a message that is a reply.
-fn reply_seq(msg: &DeviceMessage) -> Option<u32> {
-    match msg {
-        DeviceMessage::Info(info) => Some(info.of_seq),
-        DeviceMessage::Ack { of_seq } => Some(*of_seq),
-        DeviceMessage::Error(report) => report.of_seq,
-        DeviceMessage::Samples(_) | DeviceMessage::Stopped { .. } => None,
-    }
-}
-
-/// Converts a configuration in SI units to the wire's integers, and checks it against the device.
-///
-/// # Errors
-/// [`DaqError::Config`] for a rate that is not a whole number of Hz in `1..=u32::MAX`, a range that is not a
-/// whole number of mV (to 1 part in 1e9) in `1..=65535` mV, a block longer than 65535 samples, or anything
-/// [`Configure::check`] refuses.
-pub fn to_wire(config: &DaqConfig, info: &DeviceInfo) -> Result<Configure, DaqError> {
-    let bad = |detail: String| DaqError::Config { detail };
-    let rate = config.sample_rate_hz;
-    if !(rate.is_finite() && rate >= 1.0 && rate <= f64::from(u32::MAX) && rate.fract() == 0.0) {
-        return Err(bad(format!("sample rate {rate} Hz is not a whole number of Hz from 1 to {}", u32::MAX)));
-    }
-    // Exact: a whole number in u32 range.
-    let sample_rate_hz = rate as u32;
-    let samples_per_packet = u16::try_from(config.block_len_samples)
-        .map_err(|_| bad(format!("block of {} samples exceeds 65535", config.block_len_samples)))?;
-    let channels = config
-        .channels
-        .iter()
-        .map(|ch| {
-            let mv = ch.range_v * 1000.0;
-            let rounded = mv.round();
-            // Why a tolerance: 0.2 V * 1000 is 200.00000000000003 in f64.
-            if !(mv.is_finite() && (1.0..=f64::from(u16::MAX)).contains(&rounded) && (mv - rounded).abs() <= 1e-9 * mv)
-            {
-                return Err(bad(format!("range {} V is not a whole number of mV from 1 to 65535", ch.range_v)));
-            }
-            Ok(ChannelConfig { index: ch.input, range_mv: rounded as u16 })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    let wire = Configure { sample_rate_hz, samples_per_packet, channels };
-    wire.check(info).map_err(|e| bad(e.to_string()))?;
-    Ok(wire)
-}
-
-impl<T: BulkTransport> DaqDriver<T> {
-    /// Opens the device behind `transport`: drains what it still sends and asks for its identity (`GetInfo`).
-    /// Nothing else is sent until [`Daq::configure`], which also stops an acquisition left running.
+impl<T: BulkTransport> U6Driver<T> {
+    /// Opens the U6 behind `transport`: drains both IN endpoints, stops a stream left running, reads the identity
+    /// (ConfigU6) and the calibration constants (ReadCal blocks 0-3).
     ///
     /// # Errors
-    /// As every exchange: [`DaqError::Timeout`], [`DaqError::Disconnected`], [`DaqError::Unavailable`],
-    /// [`DaqError::Device`], [`DaqError::Protocol`].
+    /// As every exchange ([`DaqError::Timeout`], [`DaqError::Disconnected`], [`DaqError::Device`]);
+    /// [`DaqError::Unavailable`] for a device that is not a U6 (ProductID) or whose calibration memory holds
+    /// implausible constants.
     pub fn open(transport: T, settings: DriverSettings) -> Result<Self, DaqError> {
         let mut driver = Self {
             transport,
             settings,
-            decoder: HostDecoder::new(),
-            next_seq: 0,
-            info: DeviceInfo {
-                of_seq: 0,
-                n_channels: 0,
-                max_aggregate_rate_hz: 0,
-                ranges_mv: Vec::new(),
-                vendor: String::new(),
-                model: String::new(),
-                serial: String::new(),
-                firmware: String::new(),
-            },
+            info: DeviceInfo::default(),
             identity: DaqIdentity::default(),
+            calibration: Calibration::nominal(),
             config: None,
             stream: None,
-            inbox: VecDeque::new(),
             stats: DriverStats::default(),
         };
-        driver.drain()?;
         driver.handshake()?;
         Ok(driver)
     }
 
-    /// The device's capabilities, from its `Info` reply.
+    /// The identity ConfigU6 returned.
     pub fn info(&self) -> &DeviceInfo {
         &self.info
     }
 
-    /// The configuration in force, as sent on the wire (`None` before [`Daq::configure`]).
-    pub fn wire_config(&self) -> Option<&Configure> {
-        self.config.as_ref()
+    /// The calibration constants read from the device.
+    pub fn calibration(&self) -> &Calibration {
+        &self.calibration
+    }
+
+    /// The StreamConfig in force (`None` before [`Daq::configure`]).
+    pub fn stream_config(&self) -> Option<&StreamConfig> {
+        self.config.as_ref().map(|(c, _)| c)
     }
 
     /// What the driver has coped with so far.
@@ -216,221 +180,156 @@ impl<T: BulkTransport> DaqDriver<T> {
         &mut self.transport
     }
 
-    /// `GetInfo`; keeps the identity and capabilities.
+    /// Drains, stops a stream left running, reads identity and calibration.
     fn handshake(&mut self) -> Result<(), DaqError> {
-        let (reply, _) = self.transact(&HostCommand::GetInfo, "GetInfo")?;
-        let DeviceMessage::Info(info) = reply else {
-            return Err(match &reply {
-                DeviceMessage::Error(report) => device_error(report),
-                other => unexpected("GetInfo", other),
-            });
+        self.stream = None;
+        self.drain(false)?;
+        self.drain(true)?;
+        self.stop_stream()?;
+        self.drain(true)?;
+        let response = self.exchange(&Command::ConfigU6)?.0;
+        let ResponseBody::ConfigU6(info) = response.body else {
+            return Err(DaqError::Protocol { detail: "ConfigU6 answered with another function".into() });
         };
+        if info.product_id != PRODUCT_ID {
+            return Err(DaqError::Unavailable {
+                detail: format!("ConfigU6 reports ProductID {}, not a U6 ({PRODUCT_ID})", info.product_id),
+            });
+        }
+        let mut blocks = [[0u8; 32]; 4];
+        for (block, out) in (0u8..).zip(blocks.iter_mut()) {
+            let (response, _) = self.exchange(&Command::ReadMem { calibration: true, block })?;
+            let ResponseBody::ReadMem { data, .. } = response.body else {
+                return Err(DaqError::Protocol { detail: "ReadCal answered with another function".into() });
+            };
+            *out = data;
+        }
+        self.calibration = Calibration::from_blocks(&blocks)
+            .map_err(|e| DaqError::Unavailable { detail: format!("U6 {}: calibration memory: {e}", info.serial) })?;
         self.identity = DaqIdentity {
-            vendor: info.vendor.clone(),
-            model: info.model.clone(),
-            serial: info.serial.clone(),
-            firmware: info.firmware.clone(),
+            vendor: "LabJack".into(),
+            model: info.model().into(),
+            serial: info.serial.to_string(),
+            firmware: info.firmware_version(),
         };
         self.info = info;
-        self.stream = None;
-        self.inbox.clear();
         Ok(())
     }
 
-    /// Sends `Configure`; a device still running an acquisition the host does not know of (left by an earlier
-    /// session, or across a glitch that did not power-cycle it) refuses it, so stop it and send it again.
-    fn send_configure(&mut self, wire: &Configure) -> Result<(), DaqError> {
-        let command = HostCommand::Configure(wire.clone());
-        match self.transact(&command, "Configure")? {
-            (DeviceMessage::Ack { .. }, _) => Ok(()),
-            (DeviceMessage::Error(report), _) if report.code == ErrorCode::AlreadyRunning => {
-                self.command_ack(&HostCommand::Stop, "Stop")?;
-                self.drain()?;
-                self.command_ack(&command, "Configure").map(|_| ())
-            }
-            (DeviceMessage::Error(report), _) => Err(device_error(&report)),
-            (other, _) => Err(unexpected("Configure", &other)),
+    /// StreamStop, accepting errorcode 52 (`STREAM_NOT_RUNNING`): afterwards no stream runs.
+    fn stop_stream(&mut self) -> Result<(), DaqError> {
+        let (response, _) = self.exchange(&Command::StreamStop)?;
+        match response.errorcode {
+            Errorcode::OK | Errorcode::STREAM_NOT_RUNNING => Ok(()),
+            e => Err(device_error("StreamStop", e)),
         }
     }
 
-    /// Sends a command that is answered by `Ack`.
-    fn command_ack(&mut self, command: &HostCommand, what: &str) -> Result<u32, DaqError> {
-        let (reply, attempts) = self.transact(command, what)?;
-        match reply {
-            DeviceMessage::Ack { .. } => Ok(attempts),
-            DeviceMessage::Error(report) => Err(device_error(&report)),
-            other => Err(unexpected(what, &other)),
+    /// Sends StreamConfig; a stream still running (errorcode 48, `STREAM_IS_ACTIVE`) is stopped and the
+    /// configuration sent again.
+    fn send_stream_config(&mut self, config: &StreamConfig) -> Result<(), DaqError> {
+        let command = Command::StreamConfig(config.clone());
+        let mut errorcode = self.exchange(&command)?.0.errorcode;
+        if errorcode == Errorcode::STREAM_IS_ACTIVE {
+            self.stop_stream()?;
+            self.drain(true)?;
+            errorcode = self.exchange(&command)?.0.errorcode;
         }
+        if errorcode.is_ok() { Ok(()) } else { Err(device_error("StreamConfig", errorcode)) }
     }
 
-    /// One command exchange with bounded retries: its reply and the number of attempts it took.
-    fn transact(&mut self, command: &HostCommand, what: &str) -> Result<(DeviceMessage, u32), DaqError> {
+    /// One command exchange with bounded retries: its response and the number of attempts it took.
+    fn exchange(&mut self, command: &Command) -> Result<(Response, u32), DaqError> {
+        let bytes = command.encode().map_err(protocol_error)?;
         let attempts = self.settings.retries.saturating_add(1);
         for attempt in 1..=attempts {
             if attempt > 1 {
                 self.stats.retries += 1;
-                // A late reply to the previous attempt must not be read as this one's (the sequence numbers
-                // already tell them apart; draining also keeps the decoder from holding a torn frame).
-                self.drain()?;
+                // A late response to the previous attempt must not be taken for this one's.
+                self.drain(false)?;
             }
-            let seq = self.next_seq;
-            self.next_seq = seq.wrapping_add(1);
-            let bytes = encode(seq, command).map_err(protocol_error)?;
             match self.transport.write(&bytes, self.settings.timeout) {
                 Ok(()) => {}
                 Err(TransportError::Timeout | TransportError::Stall) => continue,
                 Err(e) => return Err(transport_error(e)),
             }
-            match self.await_reply(seq)? {
-                // The device could not read our frame (CRC): send it again.
-                Some(DeviceMessage::Error(report))
-                    if report.of_seq.is_none() && report.code == ErrorCode::MalformedCommand => {}
-                Some(reply) => return Ok((reply, attempt)),
-                None => {}
+            if let Some(response) = self.await_response(command)? {
+                return Ok((response, attempt));
             }
         }
-        Err(DaqError::Timeout { what: format!("reply to {what}"), attempts })
+        Err(DaqError::Timeout { what: format!("response to {}", command.name()), attempts })
     }
 
-    /// Reads until the reply to `seq` arrives (`Some`), or the attempt times out (`None`).
-    fn await_reply(&mut self, seq: u32) -> Result<Option<DeviceMessage>, DaqError> {
-        let deadline = Instant::now() + self.settings.timeout;
+    /// Reads until the response to `command` arrives (`Some`), or the attempt ends (`None`: timed out, or the
+    /// command must be sent again).
+    fn await_response(&mut self, command: &Command) -> Result<Option<Response>, DaqError> {
         for _ in 0..self.settings.max_transfers_per_attempt {
-            if let Some(reply) = self.route_decoded(Some(seq)) {
-                return Ok(Some(reply));
-            }
-            let remaining = deadline.saturating_duration_since(Instant::now());
-            if remaining.is_zero() {
-                return Ok(None);
-            }
-            match self.transport.read(remaining) {
-                Ok(bytes) => self.decoder.push(&bytes),
+            let bytes = match self.transport.read(self.settings.timeout) {
+                Ok(bytes) => bytes,
                 Err(TransportError::Timeout | TransportError::Stall) => return Ok(None),
                 Err(e) => return Err(transport_error(e)),
-            }
-        }
-        Ok(self.route_decoded(Some(seq)))
-    }
-
-    /// Decodes what is buffered and routes each message: the reply to `awaiting` is returned (frames behind it
-    /// stay buffered); stream messages go to the inbox while an acquisition runs; anything else is stale.
-    fn route_decoded(&mut self, awaiting: Option<u32>) -> Option<DeviceMessage> {
-        while let Some(result) = self.decoder.poll() {
-            let msg = match result {
-                Ok(frame) => frame.message,
+            };
+            match Response::decode_for(command, &bytes) {
+                Ok(response) => return Ok(Some(response)),
+                Err(U6Error::UnexpectedCommandBytes { .. }) => self.stats.stale_responses += 1,
+                // The device could not read the command, or its response was corrupted: send it again.
                 Err(_) => {
                     self.stats.decode_errors += 1;
-                    continue;
+                    return Ok(None);
                 }
-            };
-            let seq = reply_seq(&msg);
-            if seq.is_some() && seq == awaiting {
-                return Some(msg);
-            }
-            match &msg {
-                DeviceMessage::Error(report) if report.of_seq.is_none() => {
-                    if report.code == ErrorCode::MalformedCommand && awaiting.is_some() {
-                        return Some(msg);
-                    }
-                    if self.stream.is_some() {
-                        self.inbox.push_back(msg);
-                    } else {
-                        self.stats.stale_replies += 1;
-                    }
-                }
-                DeviceMessage::Samples(_) | DeviceMessage::Stopped { .. } if self.stream.is_some() => {
-                    self.inbox.push_back(msg);
-                }
-                _ => self.stats.stale_replies += 1,
             }
         }
-        None
+        Ok(None)
     }
 
-    /// Reads until the device goes quiet (or the drain bound), routing what arrives, then forgets any torn frame.
-    fn drain(&mut self) -> Result<(), DaqError> {
+    /// Reads an IN endpoint (the stream endpoint if `stream`) until it goes quiet or the drain bound, discarding
+    /// what arrives.
+    fn drain(&mut self, stream: bool) -> Result<(), DaqError> {
+        let max_len = self.stream_read_len();
         for _ in 0..self.settings.max_drain_transfers {
-            self.route_decoded(None);
-            match self.transport.read(self.settings.drain_timeout) {
-                Ok(bytes) => {
-                    self.stats.drained_transfers += 1;
-                    self.decoder.push(&bytes);
-                }
+            let result = if stream {
+                self.transport.read_stream(max_len, self.settings.drain_timeout)
+            } else {
+                self.transport.read(self.settings.drain_timeout)
+            };
+            match result {
+                Ok(_) => self.stats.drained_transfers += 1,
                 Err(TransportError::Timeout | TransportError::Stall) => break,
                 Err(e) => return Err(transport_error(e)),
             }
         }
-        self.route_decoded(None);
-        self.decoder.clear();
         Ok(())
     }
 
-    /// Handles one stream message during `read_block`: a block for a fresh packet, an error for the end of the
-    /// stream, `None` to keep reading.
-    fn on_stream_message(&mut self, msg: DeviceMessage) -> Result<Option<DaqBlock>, DaqError> {
-        let Some(stream) = self.stream.as_mut() else {
-            return Err(DaqError::Protocol { detail: "no acquisition is running".into() });
+    /// Bytes asked for per stream read: the packets of one block (of one largest packet before configuration). A
+    /// U6 ends a transfer at a packet shorter than 64 bytes, so it may send fewer; the mock U6 digitises what is
+    /// asked for at once, so the mock lab's clock moves a block per read.
+    fn stream_read_len(&self) -> usize {
+        let Some((config, block_len)) = &self.config else {
+            return metaplate_u6_protocol::packet_len(25);
         };
-        match msg {
-            DeviceMessage::Samples(packet) => on_packet(stream, &packet),
-            DeviceMessage::Error(report) => {
-                stream.fault = Some(report);
-                Ok(None)
-            }
-            DeviceMessage::Stopped { reason, next_packet_seq } => {
-                stream.tracker.finish(next_packet_seq);
-                let fault = stream.fault.take();
-                self.stream = None;
-                let detail = fault.map_or_else(|| format!("device stopped ({reason:?})"), |f| f.detail);
-                Err(match reason {
-                    StopReason::BufferOverrun => DaqError::Overrun { detail },
-                    StopReason::HardwareFault => {
-                        DaqError::Device { code: i64::from(ErrorCode::HardwareFault.code()), detail }
-                    }
-                    StopReason::HostRequest | StopReason::Reset => {
-                        DaqError::Protocol { detail: format!("acquisition ended unexpectedly: {detail}") }
-                    }
-                })
-            }
-            other => Err(unexpected("the sample stream", &other)),
+        let scans_per_packet = usize::from(config.samples_per_packet) / config.channels.len().max(1);
+        // At most 4096 packets (a block of 100 k scans at 25 samples per packet): a bounded buffer.
+        let packets = block_len.div_ceil(scans_per_packet.max(1)).clamp(1, 4096);
+        packets * metaplate_u6_protocol::packet_len(config.samples_per_packet)
+    }
+
+    /// Adds the running stream's counters to the driver's.
+    fn end_stream(&mut self) {
+        if let Some(stream) = self.stream.take() {
+            let s = stream.assembler.stats();
+            let total = &mut self.stats.stream;
+            total.packets += s.packets;
+            total.packets_missed += s.packets_missed;
+            total.scans_discarded += s.scans_discarded;
+            total.autorecover_packets += s.autorecover_packets;
+            total.stale_packets += s.stale_packets;
+            total.max_backlog = total.max_backlog.max(s.max_backlog);
         }
     }
 }
 
-/// Tracks one packet: the block it makes if fresh, with the losses charged to it.
-fn on_packet(stream: &mut Stream, packet: &SamplePacket) -> Result<Option<DaqBlock>, DaqError> {
-    let tracked = stream.tracker.track(packet);
-    let mut clipped = false;
-    for event in &tracked.events {
-        match *event {
-            StreamEvent::PacketsLost { count, .. } => stream.pending.packets_lost += u64::from(count),
-            StreamEvent::Overrun { .. } => stream.pending.overrun = true,
-            StreamEvent::Discontinuity { expected_index, got_index, packet_seq } => {
-                if got_index < expected_index {
-                    return Err(DaqError::Protocol {
-                        detail: format!(
-                            "packet {packet_seq}: sample clock went back from {expected_index} to {got_index}"
-                        ),
-                    });
-                }
-                stream.pending.samples_missing += got_index - expected_index;
-            }
-            StreamEvent::Clipped { .. } => clipped = true,
-            // Dropped packets: a duplicate loses nothing; a late or malformed one was (or will be) counted lost
-            // by the packet sequence of the next fresh packet.
-            StreamEvent::Duplicate { .. } | StreamEvent::OutOfOrder { .. } | StreamEvent::WrongShape { .. } => {}
-        }
-    }
-    if !tracked.fresh {
-        return Ok(None);
-    }
-    let volts = stream.tracker.volts(packet).map_err(protocol_error)?;
-    let mut integrity = std::mem::take(&mut stream.pending);
-    integrity.clipped = clipped;
-    Ok(Some(DaqBlock { first_sample_index: packet.first_sample_index, volts, integrity }))
-}
-
-impl<T: BulkTransport> Daq for DaqDriver<T> {
+impl<T: BulkTransport> Daq for U6Driver<T> {
     fn identity(&self) -> &DaqIdentity {
         &self.identity
     }
@@ -439,9 +338,9 @@ impl<T: BulkTransport> Daq for DaqDriver<T> {
         if self.stream.is_some() {
             return Err(DaqError::Protocol { detail: "cannot configure while an acquisition runs".into() });
         }
-        let wire = to_wire(config, &self.info)?;
-        self.send_configure(&wire)?;
-        self.config = Some(wire);
+        let stream = to_stream_config(config, self.settings.resolution_index, self.settings.settling_factor)?;
+        self.send_stream_config(&stream)?;
+        self.config = Some((stream, config.block_len_samples as usize));
         Ok(())
     }
 
@@ -449,94 +348,95 @@ impl<T: BulkTransport> Daq for DaqDriver<T> {
         if self.stream.is_some() {
             return Err(DaqError::Protocol { detail: "an acquisition is already running".into() });
         }
-        let Some(config) = &self.config else {
+        let Some((config, block_len)) = &self.config else {
             return Err(DaqError::Protocol { detail: "start before configure".into() });
         };
-        let tracker = StreamTracker::new(config).map_err(protocol_error)?;
-        self.inbox.clear();
-        // Set before sending: samples may follow the Ack in the same transfer.
-        self.stream = Some(Stream { tracker, pending: BlockIntegrity::default(), fault: None });
-        match self.transact(&HostCommand::Start, "Start") {
-            Ok((DeviceMessage::Ack { .. }, _)) => Ok(()),
-            // The Ack of an earlier attempt was lost, but that attempt started the acquisition.
-            Ok((DeviceMessage::Error(report), attempts))
-                if attempts > 1 && report.code == ErrorCode::AlreadyRunning =>
-            {
-                Ok(())
-            }
-            Ok((reply, _)) => {
-                self.stream = None;
-                Err(match &reply {
-                    DeviceMessage::Error(report) => device_error(report),
-                    other => unexpected("Start", other),
-                })
-            }
-            Err(e) => {
-                self.stream = None;
-                Err(e)
-            }
+        let assembler = ScanAssembler::new(config, self.calibration).map_err(protocol_error)?;
+        let stream = Stream {
+            decoder: StreamDecoder::new(config.samples_per_packet),
+            assembler,
+            blocks: BlockBuilder::new(*block_len, config.channels.len()),
+        };
+        let (response, attempts) = self.exchange(&Command::StreamStart)?;
+        match response.errorcode {
+            Errorcode::OK => {}
+            // The response of an earlier attempt was lost, but that attempt started the stream.
+            Errorcode::STREAM_IS_ACTIVE if attempts > 1 => {}
+            e => return Err(device_error("StreamStart", e)),
         }
+        self.stream = Some(stream);
+        Ok(())
     }
 
     fn read_block(&mut self) -> Result<DaqBlock, DaqError> {
-        if self.stream.is_none() {
-            return Err(DaqError::Protocol { detail: "read_block while no acquisition runs".into() });
-        }
-        let mut quiet_reads = 0u32;
+        let max_len = self.stream_read_len();
+        let (timeout, retries) = (self.settings.timeout, self.settings.retries);
         let max_transfers =
             u64::from(self.settings.max_transfers_per_attempt) * u64::from(self.settings.retries.saturating_add(1));
-        let mut transfers = 0u64;
+        let (mut quiet_reads, mut transfers) = (0u32, 0u64);
         loop {
-            while let Some(msg) = self.inbox.pop_front() {
-                if let Some(block) = self.on_stream_message(msg)? {
-                    return Ok(block);
-                }
+            let Some(stream) = self.stream.as_mut() else {
+                return Err(DaqError::Protocol { detail: "read_block while no acquisition runs".into() });
+            };
+            if let Some(block) = stream.blocks.ready() {
+                return Ok(block);
             }
-            self.route_decoded(None);
-            if !self.inbox.is_empty() {
-                continue;
-            }
-            if transfers >= max_transfers {
-                return Err(DaqError::Timeout { what: "fresh samples".into(), attempts: quiet_reads + 1 });
-            }
-            transfers += 1;
-            match self.transport.read(self.settings.timeout) {
-                Ok(bytes) => self.decoder.push(&bytes),
-                Err(TransportError::Timeout | TransportError::Stall) => {
-                    quiet_reads += 1;
-                    if quiet_reads > self.settings.retries {
-                        return Err(DaqError::Timeout { what: "samples".into(), attempts: quiet_reads });
+            match stream.decoder.poll() {
+                Some(Ok(packet)) => match stream.assembler.accept(&packet) {
+                    Ok(scans) => {
+                        if let Some(block) = stream.blocks.push(scans) {
+                            return Ok(block);
+                        }
+                    }
+                    Err(U6Error::StreamError { packet_number, errorcode }) => {
+                        self.end_stream();
+                        return Err(stream_error(packet_number, errorcode));
+                    }
+                    Err(e) => {
+                        self.end_stream();
+                        return Err(protocol_error(e));
+                    }
+                },
+                Some(Err(_)) => self.stats.decode_errors += 1,
+                None => {
+                    if transfers >= max_transfers {
+                        return Err(DaqError::Timeout { what: "fresh samples".into(), attempts: quiet_reads + 1 });
+                    }
+                    transfers += 1;
+                    match self.transport.read_stream(max_len, timeout) {
+                        Ok(bytes) => stream.decoder.push(&bytes),
+                        Err(TransportError::Timeout | TransportError::Stall) => {
+                            quiet_reads += 1;
+                            if quiet_reads > retries {
+                                return Err(DaqError::Timeout { what: "stream data".into(), attempts: quiet_reads });
+                            }
+                        }
+                        Err(e) => return Err(transport_error(e)),
                     }
                 }
-                Err(e) => return Err(transport_error(e)),
             }
         }
     }
 
     fn stop(&mut self) -> Result<(), DaqError> {
-        let result = self.command_ack(&HostCommand::Stop, "Stop");
-        if result.is_ok() {
-            self.stream = None;
-            self.inbox.clear();
-        }
-        result.map(|_| ())
+        self.stop_stream()?;
+        self.end_stream();
+        // Packets the U6 had buffered when it stopped: not part of any block now.
+        self.drain(true)
     }
 
     fn reopen(&mut self) -> Result<(), DaqError> {
         self.transport.reopen().map_err(transport_error)?;
-        self.stream = None;
-        self.inbox.clear();
-        self.decoder.clear();
+        self.end_stream();
         let serial = self.identity.serial.clone();
-        self.drain()?;
         self.handshake()?;
         if self.identity.serial != serial {
             return Err(DaqError::Unavailable {
-                detail: format!("reopened a different device: serial {} instead of {serial}", self.identity.serial),
+                detail: format!("reopened a different U6: serial {} instead of {serial}", self.identity.serial),
             });
         }
-        if let Some(wire) = self.config.clone() {
-            self.send_configure(&wire)?;
+        if let Some((config, _)) = self.config.clone() {
+            self.send_stream_config(&config)?;
         }
         self.stats.reopens += 1;
         Ok(())

@@ -1,5 +1,5 @@
-//! The narrow transport a bulk DAQ driver needs: one OUT and one IN bulk endpoint, with timeouts, and a way to
-//! reconnect.
+//! The narrow transport the U6 driver needs: the bulk OUT endpoint of commands, the bulk IN endpoint of their
+//! responses and the bulk IN endpoint of stream data, with timeouts, and a way to reconnect.
 
 use std::time::Duration;
 
@@ -14,10 +14,29 @@ pub struct UsbSelector {
     pub serial: Option<String>,
     /// Interface number that carries the bulk endpoints.
     pub interface: u8,
-    /// Bulk OUT endpoint address (commands), e.g. `0x01`.
+    /// Bulk OUT endpoint address (commands): `0x01` on a U6.
     pub endpoint_out: u8,
-    /// Bulk IN endpoint address (replies and samples), e.g. `0x81`.
+    /// Bulk IN endpoint address of command responses: `0x82` on a U6.
     pub endpoint_in: u8,
+    /// Bulk IN endpoint address of stream data: `0x83` on a U6.
+    pub endpoint_stream: u8,
+}
+
+impl UsbSelector {
+    /// A LabJack U6 (vendor `0x0CD5`, product `0x0006`, interface 0, endpoints `0x01`, `0x82`, `0x83`: the
+    /// Exodriver's `labjackusb.h`), by its serial number if given.
+    pub fn u6(serial: Option<String>) -> Self {
+        use metaplate_u6_protocol as u6;
+        Self {
+            vendor_id: u6::VENDOR_ID,
+            product_id: u6::PRODUCT_ID,
+            serial,
+            interface: 0,
+            endpoint_out: u6::ENDPOINT_COMMAND_OUT,
+            endpoint_in: u6::ENDPOINT_RESPONSE_IN,
+            endpoint_stream: u6::ENDPOINT_STREAM_IN,
+        }
+    }
 }
 
 /// Replaces the open handle in `slot` by a fresh one from `open`, dropping the old one *first*: a device's
@@ -51,10 +70,10 @@ pub enum TransportError {
     Other(String),
 }
 
-/// One bulk OUT and one bulk IN endpoint of a device.
+/// The bulk endpoints of a U6: commands out, responses in, stream data in.
 ///
-/// Implemented by `UsbTransport` (feature `usb`: a real device through nusb) and by the mock DAQ's in-process
-/// transport.
+/// Implemented by `UsbTransport` (feature `usb`: a real device through nusb), by the mock U6's in-process
+/// transport and by the replay's cassette transport.
 pub trait BulkTransport {
     /// Sends `bytes` as one OUT transfer, waiting at most `timeout`.
     ///
@@ -62,12 +81,18 @@ pub trait BulkTransport {
     /// [`TransportError`]: `Timeout` or `Stall` (retryable), `Disconnected`, `Other`.
     fn write(&mut self, bytes: &[u8], timeout: Duration) -> Result<(), TransportError>;
 
-    /// Receives one IN transfer (the bytes of zero or more whole or partial frames), waiting at most `timeout` for
-    /// it to begin.
+    /// Receives one IN transfer on the response endpoint (one response), waiting at most `timeout` for it.
     ///
     /// # Errors
     /// As [`write`](Self::write); `Timeout` when the device had nothing to send.
     fn read(&mut self, timeout: Duration) -> Result<Vec<u8>, TransportError>;
+
+    /// Receives one IN transfer of at most `max_len` bytes on the stream endpoint (whole StreamData packets),
+    /// waiting at most `timeout` for it.
+    ///
+    /// # Errors
+    /// As [`read`](Self::read).
+    fn read_stream(&mut self, max_len: usize, timeout: Duration) -> Result<Vec<u8>, TransportError>;
 
     /// Closes and opens the same device again (found by its serial number), for recovery after
     /// [`TransportError::Disconnected`].

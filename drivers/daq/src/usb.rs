@@ -1,25 +1,26 @@
-//! The real bulk transport: a USB device found by vendor id, product id and serial number, through nusb (blocking
-//! calls, no async runtime). Never exercised in CI; the opt-in real-device test uses it.
+//! The real bulk transport: a LabJack U6 (or any device with the same three bulk endpoints) found by vendor id,
+//! product id and serial number, through nusb (blocking calls, no async runtime). Never exercised in CI; the
+//! opt-in real-device test uses it.
 
 use std::time::Duration;
 
-use metaplate_daq_protocol::MAX_FRAME_LEN;
 use nusb::transfer::{Buffer, Bulk, Completion, In, Out, TransferError};
 use nusb::{Endpoint, Interface, MaybeFuture};
 
 use crate::transport::{BulkTransport, TransportError, UsbSelector, reopen_dropping_first};
 
-/// A USB device on metaplate's bulk protocol, found by vendor id, product id and serial number; its handles are
-/// absent between a failed reopen and the next successful one (every transfer is then `Disconnected`).
+/// A U6 on USB, found by vendor id, product id and serial number; its handles are absent between a failed reopen
+/// and the next successful one (every transfer is then `Disconnected`).
 pub struct UsbTransport {
     selector: UsbSelector,
     link: Option<UsbLink>,
 }
 
-/// The open device: its claimed interface and its two bulk endpoints.
+/// The open device: its claimed interface and its three bulk endpoints.
 struct UsbLink {
     ep_out: Endpoint<Bulk, Out>,
     ep_in: Endpoint<Bulk, In>,
+    ep_stream: Endpoint<Bulk, In>,
     /// Kept so the interface stays claimed while the endpoints are in use.
     _interface: Interface,
 }
@@ -119,7 +120,10 @@ fn open_link(selector: &UsbSelector) -> Result<UsbLink, TransportError> {
     let ep_in = interface
         .endpoint::<Bulk, In>(selector.endpoint_in)
         .map_err(|e| nusb_error("opening the bulk IN endpoint", e))?;
-    Ok(UsbLink { ep_out, ep_in, _interface: interface })
+    let ep_stream = interface
+        .endpoint::<Bulk, In>(selector.endpoint_stream)
+        .map_err(|e| nusb_error("opening the bulk IN stream endpoint", e))?;
+    Ok(UsbLink { ep_out, ep_in, ep_stream, _interface: interface })
 }
 
 /// Maps a completed transfer's status; a stall is cleared here so the caller may retry.
@@ -151,26 +155,35 @@ impl BulkTransport for UsbTransport {
     }
 
     fn read(&mut self, timeout: Duration) -> Result<Vec<u8>, TransportError> {
-        let link = self.link()?;
-        if link.ep_in.pending() != 0 {
-            return Err(TransportError::Other("a previous IN transfer is still pending".into()));
-        }
-        // IN requests must be a whole number of max-size packets; one maximum frame fits.
-        let packet = link.ep_in.max_packet_size().max(1);
-        let len = MAX_FRAME_LEN.div_ceil(packet) * packet;
-        let completion = link.ep_in.transfer_blocking(link.ep_in.allocate(len), timeout);
-        let received = completion.buffer.get(..completion.actual_len).map(<[u8]>::to_vec).unwrap_or_default();
-        match status(&completion, &mut link.ep_in) {
-            // A transfer cancelled at the timeout may still have carried bytes: keep them.
-            Err(TransportError::Timeout) if !received.is_empty() => Ok(received),
-            Err(e) => Err(e),
-            Ok(()) => Ok(received),
-        }
+        // The longest U6 response (ReadMem, 40 bytes) fits one 64-byte packet.
+        read_in(&mut self.link()?.ep_in, 64, timeout)
+    }
+
+    fn read_stream(&mut self, max_len: usize, timeout: Duration) -> Result<Vec<u8>, TransportError> {
+        read_in(&mut self.link()?.ep_stream, max_len, timeout)
     }
 
     fn reopen(&mut self) -> Result<(), TransportError> {
         // The old handle still claims the interface: it must be released before the device is claimed again.
         let selector = &self.selector;
         reopen_dropping_first(&mut self.link, || open_link(selector))
+    }
+}
+
+/// One IN transfer of up to `max_len` bytes (rounded up to whole max-size packets, as IN requests must be).
+fn read_in(endpoint: &mut Endpoint<Bulk, In>, max_len: usize, timeout: Duration) -> Result<Vec<u8>, TransportError> {
+    // `transfer_blocking` asserts that nothing is pending; this transport never leaves a transfer pending.
+    if endpoint.pending() != 0 {
+        return Err(TransportError::Other("a previous IN transfer is still pending".into()));
+    }
+    let packet = endpoint.max_packet_size().max(1);
+    let len = max_len.max(1).div_ceil(packet) * packet;
+    let completion = endpoint.transfer_blocking(endpoint.allocate(len), timeout);
+    let received = completion.buffer.get(..completion.actual_len).map(<[u8]>::to_vec).unwrap_or_default();
+    match status(&completion, endpoint) {
+        // A transfer cancelled at the timeout may still have carried bytes: keep them.
+        Err(TransportError::Timeout) if !received.is_empty() => Ok(received),
+        Err(e) => Err(e),
+        Ok(()) => Ok(received),
     }
 }

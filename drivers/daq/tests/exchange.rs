@@ -1,156 +1,129 @@
-//! Byte-exact exchanges of the driver with a scripted device: the frames are the protocol crate's documented
-//! example (protocols/daq/src/lib.rs, "Example exchange"), so the driver's OUT bytes are checked against the spec.
-
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may unwrap: a panic is the test failing
+//! Byte-exact exchanges of the driver with a scripted U6: the packets are the protocol crate's documented example
+//! (protocols/labjack-u6/src/lib.rs, "Example exchange", made with LabJackPython's checksum functions over
+//! `u6.py`'s byte lists), so the driver's OUT bytes are checked against the User's Guide's layouts.
 
 use crate::common;
 
 use common::{Scripted, hex};
 use metaplate_core::daq::{Daq, DaqChannel, DaqConfig, DaqError};
-use metaplate_daq::{DaqDriver, DriverSettings};
-use metaplate_daq_protocol::{DeviceMessage, ErrorCode, ErrorReport, SampleFlags, SamplePacket, encode};
+use metaplate_daq::{DriverSettings, U6Driver};
+use metaplate_u6_protocol::{Calibration, Command, Errorcode, Response, ResponseBody, StreamPacket, checksum};
 
-const GET_INFO_0: &str = "4d 44 01 01 00 00 00 00 00 00 00 00 61 65 31 4b";
-const INFO_0: &str = "4d 44 01 81 00 00 00 00 00 00 33 00 00 00 00 00 10 90 d0 03 00 04 10 27 88 13 e8 03 \
-    c8 00 09 6d 65 74 61 70 6c 61 74 65 09 6d 6f 63 6b 2d 36 32 31 31 06 53 4e 30 30 30 \
-    31 05 31 2e 30 2e 30 06 3f 59 01";
-const CONFIGURE_1: &str = "4d 44 01 02 00 00 01 00 00 00 0d 00 c0 5d 00 00 f0 00 02 00 10 27 01 10 27 3b 99 9f fc";
-const ACK_1: &str = "4d 44 01 82 00 00 01 00 00 00 04 00 01 00 00 00 8f de de 1a";
-const START_2: &str = "4d 44 01 03 00 00 02 00 00 00 00 00 ec ec 0f 28";
-const ACK_2: &str = "4d 44 01 82 00 00 02 00 00 00 04 00 02 00 00 00 62 ca 5c e3";
-const SAMPLES_3: &str = "4d 44 01 84 00 00 03 00 00 00 18 00 00 00 00 00 00 00 00 00 00 00 00 00 02 02 02 00 \
-    e8 03 18 fc ff 7f 00 80 0b 49 82 0b";
-const STOP_3: &str = "4d 44 01 04 00 00 03 00 00 00 00 00 80 52 32 87";
-const STOPPED_4: &str = "4d 44 01 85 00 00 04 00 00 00 05 00 01 01 00 00 00 b1 c5 4e a5";
-const ACK_5: &str = "4d 44 01 82 00 00 05 00 00 00 04 00 03 00 00 00 7e b6 3c b9";
+const CONFIG_U6: &str = "0b f8 0a 08 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00 00";
+const CONFIG_U6_RESPONSE: &str = "7d f8 10 08 6b 01 00 00 00 2b 01 0f 06 00 02 39 5a 75 15 06 00 01 00 00 00 00 00 \
+    00 00 00 00 00 00 00 00 00 00 04";
+const READ_CAL_0: &str = "27 f8 01 2d 00 00 00 00";
+const STREAM_CONFIG: &str = "0b f8 06 11 fa 00 02 00 18 00 00 08 d0 07 00 00 01 00";
+const STREAM_CONFIG_RESPONSE: &str = "0b f8 01 11 00 00 00 00";
+const STREAM_START: &str = "a8 a8";
+const STREAM_START_RESPONSE: &str = "a9 a9 00 00";
+const STREAM_STOP: &str = "b0 b0";
+const STREAM_STOP_RESPONSE: &str = "b1 b1 00 00";
+/// StreamStop while no stream runs: errorcode 52 (`STREAM_NOT_RUNNING`).
+const STREAM_STOP_NOT_RUNNING: &str = "e5 b1 34 00";
 
-/// The configuration of the documented example: inputs 0 and 1 at +/-10 V, 24 kHz, 240 samples per packet.
+/// The example's configuration: AIN0 and AIN1 at +/-10 V, 24 kHz, 12-scan blocks.
 fn example_config() -> DaqConfig {
     DaqConfig {
         channels: vec![DaqChannel { input: 0, range_v: 10.0 }, DaqChannel { input: 1, range_v: 10.0 }],
         sample_rate_hz: 24_000.0,
-        block_len_samples: 240,
+        block_len_samples: 12,
     }
 }
 
-fn open(replies: Vec<Vec<Vec<u8>>>) -> DaqDriver<Scripted> {
-    let mut all = vec![vec![hex(INFO_0)]];
-    all.extend(replies);
-    DaqDriver::open(Scripted::new(all), DriverSettings::default()).unwrap()
+/// The ReadCal response for block `block` of the ideal calibration.
+fn read_cal(block: u8) -> Vec<u8> {
+    let data = Calibration::ideal().to_blocks()[usize::from(block)];
+    Response { errorcode: Errorcode::OK, body: ResponseBody::ReadMem { calibration: true, data } }.encode()
 }
 
-fn frame(seq: u32, message: DeviceMessage) -> Vec<u8> {
-    encode(seq, &message).unwrap()
+/// The responses of opening: StreamStop (none running), ConfigU6, ReadCal 0-3.
+fn open_replies() -> Vec<Vec<Vec<u8>>> {
+    let mut all = vec![vec![hex(STREAM_STOP_NOT_RUNNING)], vec![hex(CONFIG_U6_RESPONSE)]];
+    all.extend((0..4).map(|b| vec![read_cal(b)]));
+    all
 }
 
 #[test]
 fn documented_exchange_is_byte_exact() {
-    // Ack of Start and the first packet arrive in one transfer: the packet must be kept for read_block.
-    let mut start_reply = hex(ACK_2);
-    start_reply.extend(hex(SAMPLES_3));
-    let mut daq = open(vec![vec![hex(ACK_1)], vec![start_reply], vec![hex(STOPPED_4), hex(ACK_5)]]);
+    let mut replies = open_replies();
+    replies.extend([
+        vec![hex(STREAM_CONFIG_RESPONSE)],
+        vec![hex(STREAM_START_RESPONSE)],
+        vec![hex(STREAM_STOP_RESPONSE)],
+    ]);
+    let samples: Vec<u16> = (0..24).map(|k| 32_768 + k).collect();
+    let packet = StreamPacket { timestamp: 0, packet_number: 0, errorcode: Errorcode::OK, samples, backlog: 2 };
+    let mut daq =
+        U6Driver::open(Scripted::new(replies, vec![packet.encode().unwrap()]), DriverSettings::default()).unwrap();
     let id = daq.identity().clone();
     assert_eq!(
         (id.vendor.as_str(), id.model.as_str(), id.serial.as_str(), id.firmware.as_str()),
-        ("metaplate", "mock-6211", "SN0001", "1.0.0")
+        ("LabJack", "U6", "360012345", "1.43")
     );
+    assert_eq!(daq.calibration(), &Calibration::from_blocks(&Calibration::ideal().to_blocks()).unwrap());
     daq.configure(&example_config()).unwrap();
     daq.start().unwrap();
     let block = daq.read_block().unwrap();
     daq.stop().unwrap();
-
-    let written = &daq.transport().written;
-    let expected: Vec<Vec<u8>> = [GET_INFO_0, CONFIGURE_1, START_2, STOP_3].iter().map(|h| hex(h)).collect();
-    assert_eq!(written, &expected);
-
-    // Codes 1000, -1000, 32767, -32768 on +/-10 V are code * 10 / 32768 V: exact in f64 (a 16-bit code times a
-    // power-of-two scale), so equality is the right check.
-    let v = |code: f64| code * 10.0 / 32768.0;
+    let written: Vec<Vec<u8>> = daq.transport().written.clone();
+    let mut expected = vec![hex(STREAM_STOP), hex(CONFIG_U6), hex(READ_CAL_0)];
+    expected.extend((1..4).map(|block| Command::ReadMem { calibration: true, block }.encode().unwrap()));
+    expected.extend([hex(STREAM_CONFIG), hex(STREAM_START), hex(STREAM_STOP)]);
+    assert_eq!(written, expected);
+    // The samples interleave AIN0, AIN1: codes 32768 + 2k on AIN0, 32769 + 2k on AIN1, 10/32768 V per code.
     assert_eq!(block.first_sample_index, 0);
-    assert_eq!(block.volts, vec![vec![v(1000.0), v(32767.0)], vec![v(-1000.0), v(-32768.0)]]);
-    assert!(block.integrity.clipped, "a pair on the rails is clipping");
-    assert!(block.integrity.is_contiguous());
+    let step = 10.0 / 32_768.0;
+    assert_eq!(block.volts[0], (0..12).map(|k| f64::from(2 * k) * step).collect::<Vec<_>>());
+    assert_eq!(block.volts[1], (0..12).map(|k| f64::from(2 * k + 1) * step).collect::<Vec<_>>());
+    assert!(block.integrity.is_contiguous() && !block.integrity.clipped);
 }
 
 #[test]
-fn stale_replies_and_garbage_are_skipped() {
-    // Before the Ack of Configure (seq 1): junk bytes and an Ack of a command never sent in this attempt.
-    let mut transfer = b"junk".to_vec();
-    transfer.extend(frame(1, DeviceMessage::Ack { of_seq: 7 }));
-    transfer.extend(frame(2, DeviceMessage::Ack { of_seq: 1 }));
-    let mut daq = open(vec![vec![transfer]]);
+fn a_stale_response_is_dropped_and_a_bad_checksum_resends() {
+    let mut replies = open_replies();
+    // StreamConfig is answered first by a stale StreamStop response, then `B8 B8`; the resend gets its answer.
+    replies.push(vec![hex(STREAM_STOP_RESPONSE), vec![0xb8, 0xb8]]);
+    replies.push(vec![hex(STREAM_CONFIG_RESPONSE)]);
+    let mut daq = U6Driver::open(Scripted::new(replies, vec![]), DriverSettings::default()).unwrap();
     daq.configure(&example_config()).unwrap();
-    assert_eq!(daq.stats().stale_replies, 1);
-    assert_eq!(daq.stats().decode_errors, 1, "one run of garbage");
-    assert_eq!(daq.stats().retries, 0);
-}
-
-#[test]
-fn device_refusal_is_a_device_error_with_its_code() {
-    let refusal = ErrorReport { of_seq: Some(1), code: ErrorCode::RateOutOfRange, detail: "too fast".into() };
-    let mut daq = open(vec![vec![frame(1, DeviceMessage::Error(refusal))]]);
-    let err = daq.configure(&example_config()).unwrap_err();
-    assert!(matches!(&err, DaqError::Device { code: 2, detail } if detail.contains("too fast")), "{err:?}");
-    assert!(daq.wire_config().is_none(), "a refused configuration is not in force");
-}
-
-#[test]
-fn unanswered_command_times_out_after_the_retry_bound() {
-    let mut daq = open(vec![]);
-    let err = daq.configure(&example_config()).unwrap_err();
-    assert!(matches!(err, DaqError::Timeout { attempts: 3, .. }), "{err:?}");
-    // GetInfo, then three Configure attempts with fresh sequence numbers 1, 2, 3.
-    let seqs: Vec<u8> = daq.transport().written.iter().map(|f| f[6]).collect();
-    assert_eq!(seqs, vec![0, 1, 2, 3]);
-    assert_eq!(daq.stats().retries, 2);
-}
-
-#[test]
-fn lost_start_ack_then_already_running_counts_as_started() {
-    let running = ErrorReport { of_seq: Some(3), code: ErrorCode::AlreadyRunning, detail: String::new() };
-    let mut daq = open(vec![vec![hex(ACK_1)], vec![], vec![frame(2, DeviceMessage::Error(running))]]);
-    daq.configure(&example_config()).unwrap();
-    daq.start().unwrap();
+    assert_eq!(daq.stats().stale_responses, 1);
     assert_eq!(daq.stats().retries, 1);
+    let written = &daq.transport().written;
+    assert_eq!(written[written.len() - 2..], [hex(STREAM_CONFIG), hex(STREAM_CONFIG)]);
 }
 
 #[test]
-fn lost_and_duplicated_packets_are_reported_not_stitched() {
-    let packet = |packet_seq, first_sample_index| {
-        frame(
-            9,
-            DeviceMessage::Samples(SamplePacket {
-                packet_seq,
-                first_sample_index,
-                flags: SampleFlags::default(),
-                n_channels: 2,
-                samples: vec![1, 2, 3, 4],
-            }),
-        )
-    };
-    // Packet 0, a duplicate of it, then packet 2 (packet 1 lost in transit).
-    let stream = vec![hex(ACK_2), packet(0, 0), packet(0, 0), packet(2, 4)];
-    let mut daq = open(vec![vec![hex(ACK_1)], stream]);
-    daq.configure(&DaqConfig { block_len_samples: 2, ..example_config() }).unwrap();
-    daq.start().unwrap();
-    let first = daq.read_block().unwrap();
-    assert_eq!(first.first_sample_index, 0);
-    assert!(first.integrity.is_contiguous());
-    let second = daq.read_block().unwrap();
-    assert_eq!(second.first_sample_index, 4);
-    assert_eq!(second.integrity.packets_lost, 1);
-    assert_eq!(second.integrity.samples_missing, 2);
-    assert!(!second.integrity.is_contiguous());
-    // Nothing more arrives: bounded by the retries, then a typed timeout.
-    assert!(matches!(daq.read_block(), Err(DaqError::Timeout { .. })));
+fn a_device_errorcode_is_typed_with_its_name() {
+    let mut replies = open_replies();
+    let mut refused = hex(STREAM_CONFIG_RESPONSE);
+    refused[6] = 58;
+    checksum::seal(&mut refused);
+    replies.push(vec![refused]);
+    let mut daq = U6Driver::open(Scripted::new(replies, vec![]), DriverSettings::default()).unwrap();
+    let err = daq.configure(&example_config()).unwrap_err();
+    assert_eq!(
+        err,
+        DaqError::Device { code: 58, detail: "StreamConfig returned STREAM_SCAN_RATE_INVALID (58)".into() }
+    );
 }
 
 #[test]
-fn misuse_is_refused_before_anything_is_sent() {
-    let mut daq = open(vec![]);
-    assert!(matches!(daq.start(), Err(DaqError::Protocol { .. })));
-    assert!(matches!(daq.read_block(), Err(DaqError::Protocol { .. })));
-    let bad_range = DaqConfig { channels: vec![DaqChannel { input: 0, range_v: 3.0 }], ..example_config() };
-    assert!(matches!(daq.configure(&bad_range), Err(DaqError::Config { .. })));
-    assert_eq!(daq.transport().written.len(), 1, "only GetInfo was sent");
+fn a_device_that_is_not_a_u6_is_refused() {
+    let mut info = hex(CONFIG_U6_RESPONSE);
+    info[19] = 3; // ProductID 3: a U3.
+    checksum::seal(&mut info);
+    let replies = vec![vec![hex(STREAM_STOP_NOT_RUNNING)], vec![info]];
+    let err = U6Driver::open(Scripted::new(replies, vec![]), DriverSettings::default()).unwrap_err();
+    assert!(matches!(err, DaqError::Unavailable { .. }), "{err:?}");
+}
+
+#[test]
+fn an_erased_calibration_memory_is_refused() {
+    let mut replies = vec![vec![hex(STREAM_STOP_NOT_RUNNING)], vec![hex(CONFIG_U6_RESPONSE)]];
+    let erased =
+        Response { errorcode: Errorcode::OK, body: ResponseBody::ReadMem { calibration: true, data: [0xff; 32] } };
+    replies.extend((0..4).map(|_| vec![erased.encode()]));
+    let err = U6Driver::open(Scripted::new(replies, vec![]), DriverSettings::default()).unwrap_err();
+    assert!(matches!(&err, DaqError::Unavailable { detail } if detail.contains("calibration")), "{err:?}");
 }

@@ -1,21 +1,27 @@
-//! The mock DAQ's device side: a state machine on [`DeviceDecoder`] that answers commands and produces sample
-//! packets from a caller's signal source, following metaplate's DAQ protocol.
+//! The mock U6's device side: a state machine answering the U6's low-level functions (User's Guide section 5.2)
+//! and producing StreamData packets from a caller's signal source, as the guide and LabJackPython's `u6.py`
+//! describe the device.
 //!
-//! Time is fast-forward: a packet is produced when the host reads and nothing else is queued, so the device's
-//! sample index is its clock and no wall time passes.
+//! Time is fast-forward: stream packets are produced when the host reads the stream endpoint, so the device's scan
+//! index is its clock and no wall time passes.
+//!
+//! Where the guide leaves the device's behaviour open, the mock chooses, and says so: StreamStart before any
+//! StreamConfig answers errorcode 50 (`STREAM_CONFIG_INVALID`); a function it does not implement (Feedback,
+//! ConfigIO, user memory...) gets no response, or errorcode 26 (`INVALID_BLOCK`) for memory blocks other than
+//! calibration blocks 0-3; after an overflow it cannot count (errorcode 63) it stops streaming.
 
 use std::collections::VecDeque;
 
-use metaplate_daq_protocol::{
-    Configure, DaqError, DeviceDecoder, DeviceInfo, DeviceMessage, ErrorCode, ErrorReport, HostCommand, SampleFlags,
-    SamplePacket, StopReason, encode, scale::volts_to_raw,
+use metaplate_u6_protocol::{
+    BAD_CHECKSUM_RESPONSE, Calibration, Command, DeviceInfo, Errorcode, Response, ResponseBody, StreamConfig,
+    StreamPacket, U6Error,
 };
 
 /// The analog signal at the device's inputs.
 pub trait SignalSource: Send {
-    /// Writes the voltage at analog input `input` for samples `first_sample_index ..` (per-channel sample clock,
-    /// 0 at the acquisition's start) at `sample_rate_hz` into `out`, V. Voltages beyond the channel's range clip;
-    /// a non-finite value is a hardware fault (the device ends the acquisition).
+    /// Writes the voltage at analog input `input` for scans `first_sample_index ..` (per-channel sample clock, 0
+    /// at the stream's start) at `sample_rate_hz` into `out`, V. Voltages beyond the channel's range clip; a
+    /// non-finite value is a hardware fault (the device ends the stream with errorcode 63).
     fn fill(&mut self, input: u8, first_sample_index: u64, sample_rate_hz: f64, out: &mut [f64]);
 }
 
@@ -25,47 +31,50 @@ impl<F: FnMut(u8, u64, f64, &mut [f64]) + Send> SignalSource for F {
     }
 }
 
-/// The identity and capabilities of a USB-6211 class device (16 inputs, 250 kHz aggregate, +/-10, 5, 1, 0.2 V),
-/// as the protocol's documented example, with serial number `serial`.
-pub fn usb6211_info(serial: &str) -> DeviceInfo {
+/// The identity of a U6 (not a Pro) with serial number `serial`: firmware 1.43, bootloader 6.15, hardware 2.00,
+/// LocalID 1 (VersionInfo 4, as LabJackPython's `configU6` docstring shows for a U6).
+pub fn u6_info(serial: u32) -> DeviceInfo {
     DeviceInfo {
-        of_seq: 0,
-        n_channels: 16,
-        max_aggregate_rate_hz: 250_000,
-        ranges_mv: vec![10_000, 5_000, 1_000, 200],
-        vendor: "metaplate".into(),
-        model: "mock-6211".into(),
-        serial: serial.into(),
-        firmware: "1.0.0".into(),
+        firmware: (1, 43),
+        bootloader: (6, 15),
+        hardware: (2, 0),
+        serial,
+        product_id: metaplate_u6_protocol::PRODUCT_ID,
+        local_id: 1,
+        version_info: 4,
     }
 }
 
-/// A running acquisition.
+/// A running stream.
 #[derive(Debug, Clone, Copy)]
 struct Run {
-    packet_seq: u32,
-    sample_index: u64,
-    /// Samples were dropped since the last packet: flag the next one.
-    overrun: bool,
+    packet_number: u8,
+    /// Index of the next scan to digitise.
+    scan_index: u64,
+    /// Scans discarded by an overflow not yet reported (errorcode 59 sent, 60 due).
+    discarding: Option<u64>,
 }
 
-/// The mock DAQ.
-pub struct MockDaq {
+/// The mock U6.
+pub struct MockU6 {
     info: DeviceInfo,
+    calibration: Calibration,
     source: Box<dyn SignalSource>,
-    decoder: DeviceDecoder,
-    out_seq: u32,
-    config: Option<Configure>,
+    config: Option<StreamConfig>,
     run: Option<Run>,
-    /// Encoded frames waiting for the host to read them.
-    outbox: VecDeque<Vec<u8>>,
-    /// Frames that could not be encoded (a bug of the mock if ever non-zero).
-    unencodable: u64,
+    /// Samples digitised, not yet sent (the U6's stream buffer).
+    buffer: VecDeque<u16>,
+    /// An overflow injected, to report from the next packet on: scans it discards.
+    overflow: Option<u64>,
+    /// The next packet reports an overflow auto-recovery cannot count (errorcode 63).
+    fatal: bool,
+    /// Responses waiting on the response endpoint.
+    responses: VecDeque<Vec<u8>>,
 }
 
-impl std::fmt::Debug for MockDaq {
+impl std::fmt::Debug for MockU6 {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("MockDaq")
+        f.debug_struct("MockU6")
             .field("serial", &self.info.serial)
             .field("config", &self.config)
             .field("run", &self.run)
@@ -73,215 +82,242 @@ impl std::fmt::Debug for MockDaq {
     }
 }
 
-impl MockDaq {
-    /// A powered-on, idle, unconfigured device with identity `info` (its `of_seq` is ignored) sampling `source`.
-    ///
-    /// # Errors
-    /// [`DaqError::Unencodable`] if `info` cannot be sent (a text field over 255 bytes, over 255 ranges).
-    pub fn new(info: DeviceInfo, source: Box<dyn SignalSource>) -> Result<Self, DaqError> {
-        encode(0, &DeviceMessage::Info(info.clone()))?;
-        Ok(Self {
+impl MockU6 {
+    /// A powered-on, unconfigured U6 with identity `info`, calibration memory holding `calibration` (as fixed
+    /// point holds it: the device digitises with the constants a host reads back), sampling `source`.
+    pub fn new(info: DeviceInfo, calibration: Calibration, source: Box<dyn SignalSource>) -> Self {
+        let calibration = Calibration::from_blocks(&calibration.to_blocks()).unwrap_or(calibration);
+        Self {
             info,
+            calibration,
             source,
-            decoder: DeviceDecoder::new(),
-            out_seq: 0,
             config: None,
             run: None,
-            outbox: VecDeque::new(),
-            unencodable: 0,
-        })
+            buffer: VecDeque::new(),
+            overflow: None,
+            fatal: false,
+            responses: VecDeque::new(),
+        }
     }
 
-    /// The configuration in force.
-    pub fn config(&self) -> Option<&Configure> {
+    /// The identity ConfigU6 returns.
+    pub fn info(&self) -> &DeviceInfo {
+        &self.info
+    }
+
+    /// The stream configuration in force.
+    pub fn config(&self) -> Option<&StreamConfig> {
         self.config.as_ref()
     }
 
-    /// Whether an acquisition runs.
+    /// Whether a stream runs.
     pub fn is_running(&self) -> bool {
         self.run.is_some()
     }
 
-    /// The device's sample clock: samples per channel since the running acquisition started (`None` if idle).
-    pub fn sample_index(&self) -> Option<u64> {
-        self.run.map(|r| r.sample_index)
+    /// The device's scan clock: scans since the running stream started (`None` if idle).
+    pub fn scan_index(&self) -> Option<u64> {
+        self.run.map(|r| r.scan_index)
     }
 
-    /// Frames the mock failed to encode (0 unless the mock has a bug).
-    pub fn unencodable_frames(&self) -> u64 {
-        self.unencodable
-    }
-
-    /// Power cycle (a USB disconnect): the acquisition, configuration, queued frames, partial input and frame
-    /// counter are gone.
+    /// Power cycle (a USB disconnect): the stream, configuration, buffer and queued responses are gone.
     pub fn power_cycle(&mut self) {
-        self.decoder.clear();
-        self.out_seq = 0;
         self.config = None;
         self.run = None;
-        self.outbox.clear();
+        self.buffer.clear();
+        self.overflow = None;
+        self.fatal = false;
+        self.responses.clear();
     }
 
-    /// The buffer overflows: the next `lost_packets` packets' worth of samples are dropped at the source; the
-    /// sample clock keeps counting and the next packet carries the overrun flag. Does nothing while idle.
-    pub fn overrun(&mut self, lost_packets: u32) {
-        let spp = self.config.as_ref().map_or(0, |c| u64::from(c.samples_per_packet));
-        if let Some(run) = self.run.as_mut() {
-            run.sample_index += u64::from(lost_packets) * spp;
-            run.overrun = true;
+    /// The stream buffer overflows: the next packet carries errorcode 59 (auto-recovery active, its samples
+    /// good), then the buffer's remaining scans and `lost_scans` more (at least 1) are discarded, and the packet
+    /// after reports errorcode 60 with the dummy scan and TimeStamp = scans discarded. Nothing happens while idle.
+    pub fn overflow(&mut self, lost_scans: u64) {
+        if self.run.is_some() {
+            self.overflow = Some(lost_scans.max(1));
         }
     }
 
-    /// An overflow the device cannot recover from: it reports `Error` (buffer overrun) and `Stopped`. Does
-    /// nothing while idle.
-    pub fn fatal_overrun(&mut self) {
-        self.abort(ErrorCode::BufferOverrun, StopReason::BufferOverrun, "sample buffer overflowed");
+    /// An overflow too long for auto-recovery to count: the next packet carries errorcode 63
+    /// (`STREAM_AUTORECOVER_OVERFLOW`) and the stream ends. Nothing happens while idle.
+    pub fn fatal_overflow(&mut self) {
+        if self.run.is_some() {
+            self.fatal = true;
+        }
     }
 
-    /// Takes one OUT transfer from the host and queues the replies.
+    /// Takes one OUT transfer (one command) from the host and queues its response.
     pub fn receive(&mut self, bytes: &[u8]) {
-        self.decoder.push(bytes);
-        while let Some(result) = self.decoder.poll() {
-            match result {
-                Ok(frame) => self.command(frame.seq, frame.message),
-                Err(DaqError::Garbage { .. }) => {}
-                // The decoder's errors do not carry the frame's sequence number, so every refusal goes without
-                // `of_seq` (the protocol allows that only for a failed CRC: a documented limit of the mock).
-                Err(DaqError::UnknownType { .. } | DaqError::VersionMismatch { .. }) => {
-                    self.error(None, ErrorCode::UnsupportedCommand, "unsupported command");
+        match Command::decode(bytes) {
+            Ok(command) => {
+                if let Some(response) = self.command(command) {
+                    self.responses.push_back(response.encode());
                 }
-                Err(e) => self.error(None, ErrorCode::MalformedCommand, &e.to_string()),
             }
+            Err(U6Error::Checksum { .. }) => self.responses.push_back(BAD_CHECKSUM_RESPONSE.to_vec()),
+            // No response to a function the mock does not implement (see the module documentation).
+            Err(_) => {}
         }
     }
 
-    /// The next IN transfer: queued frames (whole, up to `max_len` bytes, at least one), or else a new sample
-    /// packet if running, or `None` when the device has nothing to send.
-    pub fn next_transfer(&mut self, max_len: usize) -> Option<Vec<u8>> {
-        if self.outbox.is_empty() {
-            self.produce_packet();
-        }
-        let mut out = self.outbox.pop_front()?;
-        while let Some(next) = self.outbox.front() {
-            if out.len() + next.len() > max_len {
+    /// The next response on the response endpoint, `None` when none is waiting.
+    pub fn next_response(&mut self) -> Option<Vec<u8>> {
+        self.responses.pop_front()
+    }
+
+    /// The next stream-endpoint transfer: up to `max_packets` StreamData packets (at least 1), or `None` while no
+    /// stream runs.
+    pub fn next_stream_transfer(&mut self, max_packets: usize) -> Option<Vec<u8>> {
+        let spp = usize::from(self.config.as_ref()?.samples_per_packet);
+        let mut out = Vec::new();
+        for _ in 0..max_packets.max(1) {
+            if self.run.is_none() {
                 break;
             }
-            out.extend_from_slice(next);
-            self.outbox.pop_front();
-        }
-        Some(out)
-    }
-
-    fn send(&mut self, message: &DeviceMessage) {
-        match encode(self.out_seq, message) {
-            Ok(bytes) => {
-                self.outbox.push_back(bytes);
-                self.out_seq = self.out_seq.wrapping_add(1);
+            // Digitise the transfer's scans in one pass over the source (the lab's signals are cheaper in runs).
+            let want = spp * max_packets.max(1);
+            if self.buffer.len() < spp {
+                self.digitise(want.saturating_sub(self.buffer.len()));
             }
-            Err(_) => self.unencodable += 1,
+            match self.next_packet() {
+                Some(packet) => out.extend(packet),
+                None => break,
+            }
         }
+        (!out.is_empty()).then_some(out)
     }
 
-    fn error(&mut self, of_seq: Option<u32>, code: ErrorCode, detail: &str) {
-        // Text fields hold at most 255 bytes: cut on a character boundary.
-        let mut end = detail.len().min(255);
-        while !detail.is_char_boundary(end) {
-            end -= 1;
-        }
-        self.send(&DeviceMessage::Error(ErrorReport { of_seq, code, detail: detail[..end].into() }));
-    }
-
-    fn command(&mut self, seq: u32, command: HostCommand) {
-        let ack = DeviceMessage::Ack { of_seq: seq };
+    fn command(&mut self, command: Command) -> Option<Response> {
+        let reply = |errorcode: Errorcode, body| Some(Response { errorcode, body });
         match command {
-            HostCommand::GetInfo => {
-                let info = DeviceInfo { of_seq: seq, ..self.info.clone() };
-                self.send(&DeviceMessage::Info(info));
+            Command::ConfigU6 => reply(Errorcode::OK, ResponseBody::ConfigU6(self.info)),
+            Command::ReadMem { calibration: true, block } if block < 4 => {
+                let data = self.calibration.to_blocks()[usize::from(block)];
+                reply(Errorcode::OK, ResponseBody::ReadMem { calibration: true, data })
             }
-            HostCommand::Configure(_) if self.run.is_some() => {
-                self.error(Some(seq), ErrorCode::AlreadyRunning, "stop first");
+            Command::ReadMem { calibration, .. } => {
+                reply(Errorcode::INVALID_BLOCK, ResponseBody::ReadMem { calibration, data: [0; 32] })
             }
-            HostCommand::Configure(config) => match config.check(&self.info) {
-                Ok(()) => {
-                    self.config = Some(config);
-                    self.send(&ack);
-                }
-                Err(DaqError::ConfigRejected { code, reason }) => self.error(Some(seq), code, &reason),
-                Err(e) => self.error(Some(seq), ErrorCode::BadConfig, &e.to_string()),
-            },
-            HostCommand::Start if self.config.is_none() => {
-                self.error(Some(seq), ErrorCode::NotConfigured, "configure first");
+            Command::StreamConfig(_) if self.run.is_some() => {
+                reply(Errorcode::STREAM_IS_ACTIVE, ResponseBody::StreamConfig)
             }
-            HostCommand::Start if self.run.is_some() => self.error(Some(seq), ErrorCode::AlreadyRunning, "running"),
-            HostCommand::Start => {
-                self.run = Some(Run { packet_seq: 0, sample_index: 0, overrun: false });
-                self.send(&ack);
+            Command::StreamConfig(config) => {
+                let errorcode = match config.check() {
+                    Ok(()) => {
+                        self.config = Some(config);
+                        Errorcode::OK
+                    }
+                    Err(U6Error::ConfigRejected { errorcode, .. }) => errorcode,
+                    Err(_) => Errorcode::STREAM_CONFIG_INVALID,
+                };
+                reply(errorcode, ResponseBody::StreamConfig)
             }
-            HostCommand::Stop => {
-                // Fast-forward: no sample is buffered, so nothing precedes `Stopped`.
-                self.end_run(StopReason::HostRequest);
-                self.send(&ack);
+            Command::StreamStart if self.run.is_some() => reply(Errorcode::STREAM_IS_ACTIVE, ResponseBody::StreamStart),
+            Command::StreamStart if self.config.is_none() => {
+                reply(Errorcode::STREAM_CONFIG_INVALID, ResponseBody::StreamStart)
             }
-            HostCommand::Reset => {
-                self.end_run(StopReason::Reset);
-                self.config = None;
-                self.send(&ack);
+            Command::StreamStart => {
+                self.run = Some(Run { packet_number: 0, scan_index: 0, discarding: None });
+                self.buffer.clear();
+                reply(Errorcode::OK, ResponseBody::StreamStart)
+            }
+            Command::StreamStop if self.run.is_none() => reply(Errorcode::STREAM_NOT_RUNNING, ResponseBody::StreamStop),
+            Command::StreamStop => {
+                // Fast-forward: nothing is buffered beyond what was read, so nothing follows the stop.
+                self.end_run();
+                reply(Errorcode::OK, ResponseBody::StreamStop)
             }
         }
     }
 
-    fn end_run(&mut self, reason: StopReason) {
-        if let Some(run) = self.run.take() {
-            self.send(&DeviceMessage::Stopped { reason, next_packet_seq: run.packet_seq });
-        }
+    fn end_run(&mut self) {
+        self.run = None;
+        self.buffer.clear();
+        self.overflow = None;
+        self.fatal = false;
     }
 
-    fn abort(&mut self, code: ErrorCode, reason: StopReason, detail: &str) {
-        if self.run.is_some() {
-            self.error(None, code, detail);
-            self.end_run(reason);
-        }
-    }
-
-    /// Digitises the next packet of the running acquisition into the outbox.
-    fn produce_packet(&mut self) {
-        let (Some(run), Some(config)) = (self.run, self.config.as_ref()) else { return };
-        let spp = usize::from(config.samples_per_packet);
+    /// Digitises whole scans holding at least `samples` samples into the buffer.
+    fn digitise(&mut self, samples: usize) {
+        let (Some(run), Some(config)) = (self.run.as_mut(), self.config.as_ref()) else { return };
         let n = config.channels.len();
-        let rate_hz = f64::from(config.sample_rate_hz);
-        let mut samples = vec![0i16; spp * n];
-        let mut volts = vec![0.0; spp];
-        let mut clipped = false;
-        for (pos, ch) in config.channels.iter().enumerate() {
-            self.source.fill(ch.index, run.sample_index, rate_hz, &mut volts);
-            for (i, &v) in volts.iter().enumerate() {
-                match volts_to_raw(v, ch.range_mv) {
-                    Ok((code, clip)) => {
-                        samples[i * n + pos] = code;
-                        clipped |= clip;
-                    }
-                    Err(_) => {
-                        let detail = format!("input {} produced a non-finite voltage", ch.index);
-                        self.abort(ErrorCode::HardwareFault, StopReason::HardwareFault, &detail);
-                        return;
-                    }
+        let scans = samples.div_ceil(n.max(1));
+        let rate_hz = config.scan_rate_hz();
+        let mut per_channel = Vec::with_capacity(n);
+        let mut volts = vec![0.0; scans];
+        for ch in &config.channels {
+            self.source.fill(ch.positive, run.scan_index, rate_hz, &mut volts);
+            let codes: Result<Vec<u16>, U6Error> =
+                volts.iter().map(|&v| self.calibration.code(ch.gain, v).map(|(code, _)| code)).collect();
+            match codes {
+                Ok(codes) => per_channel.push(codes),
+                Err(_) => {
+                    // A non-finite input: the mock's stand-in for a hardware fault.
+                    self.fatal = true;
+                    return;
                 }
             }
         }
-        // A configuration accepted by `check` has at most 255 channels.
-        let n_channels = u8::try_from(n).unwrap_or(u8::MAX);
-        let packet = SamplePacket {
-            packet_seq: run.packet_seq,
-            first_sample_index: run.sample_index,
-            flags: SampleFlags { overrun: run.overrun, clipped },
-            n_channels,
-            samples,
+        for i in 0..scans {
+            self.buffer.extend(per_channel.iter().map(|codes| codes[i]));
+        }
+        run.scan_index += scans as u64;
+    }
+
+    /// The next packet from the buffer (with the overflow reports due), `None` if the stream ended.
+    fn next_packet(&mut self) -> Option<Vec<u8>> {
+        let config = self.config.as_ref()?;
+        let (spp, n) = (usize::from(config.samples_per_packet), config.channels.len().max(1));
+        let run = self.run.as_mut()?;
+        let number = run.packet_number;
+        run.packet_number = number.wrapping_add(1);
+        let discarding = run.discarding.take();
+        let mut packet = StreamPacket {
+            timestamp: 0,
+            packet_number: number,
+            errorcode: Errorcode::OK,
+            samples: Vec::new(),
+            backlog: 0,
         };
-        self.send(&DeviceMessage::Samples(packet));
-        self.run = Some(Run {
-            packet_seq: run.packet_seq.wrapping_add(1),
-            sample_index: run.sample_index + spp as u64,
-            overrun: false,
-        });
+        if self.fatal {
+            return self.fatal_packet(packet, spp);
+        }
+        if let Some(lost) = self.overflow.take() {
+            // The buffer is full: this packet goes out flagged; what stays buffered is discarded with `lost` more.
+            packet.errorcode = Errorcode::STREAM_AUTORECOVER_ACTIVE;
+            packet.backlog = 255;
+            if let Some(run) = self.run.as_mut() {
+                run.discarding = Some(lost);
+            }
+        } else if let Some(lost) = discarding {
+            let buffered_scans = (self.buffer.len() / n) as u64;
+            self.buffer.clear();
+            if let Some(run) = self.run.as_mut() {
+                run.scan_index += lost;
+            }
+            packet.errorcode = Errorcode::STREAM_AUTORECOVER_REPORT;
+            // TimeStamp: every scan slot between the last one sent and the first one after, the dummy's included.
+            packet.timestamp = u32::try_from(buffered_scans + lost).unwrap_or(u32::MAX);
+            packet.samples = vec![0xffff; n.min(spp)];
+        }
+        let want = spp - packet.samples.len();
+        if self.buffer.len() < want {
+            self.digitise(want - self.buffer.len());
+        }
+        if self.fatal || self.buffer.len() < want {
+            // Digitising failed (a non-finite input): report it in this packet.
+            return self.fatal_packet(packet, spp);
+        }
+        packet.samples.extend(self.buffer.drain(..want));
+        packet.encode().ok()
+    }
+
+    /// `packet` as the report of an overflow auto-recovery cannot count (errorcode 63); the stream ends.
+    fn fatal_packet(&mut self, mut packet: StreamPacket, spp: usize) -> Option<Vec<u8>> {
+        packet.errorcode = Errorcode::STREAM_AUTORECOVER_OVERFLOW;
+        packet.samples = vec![0xffff; spp];
+        self.end_run();
+        packet.encode().ok()
     }
 }

@@ -2,11 +2,11 @@
 
 use metaplate_core::rng::SplitMix64;
 
-/// A fault the mock transport injects when the host attempts a given IN transfer.
+/// A fault the mock transport injects when the host attempts a given IN transfer (on either IN endpoint).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Fault {
-    /// The IN endpoint stalls: this read and the `reads - 1` after it time out. The device's frames are held,
-    /// not lost, and arrive once the stall ends.
+    /// The IN endpoints stall: this read and the `reads - 1` after it time out. The device's responses and
+    /// stream data are held, not lost, and arrive once the stall ends.
     Stall {
         /// Reads that time out (at least 1 to have an effect).
         reads: u32,
@@ -14,14 +14,16 @@ pub enum Fault {
     /// The device drops off the bus (it power-cycles: configuration and acquisition are lost). Every transfer
     /// fails with `Disconnected` until the host reopens it.
     Disconnect,
-    /// The device's buffer overflows: `packets` packets' worth of samples are dropped at the source, the next
-    /// packet carries the overrun flag and a sample index that skips them. Nothing happens while idle.
+    /// The U6's stream buffer overflows: auto-recovery discards `scans` scans (and what the buffer held), the
+    /// next packet carries errorcode 59 and the one after errorcode 60 with the count. Nothing happens while idle.
     Overrun {
-        /// Packets' worth of samples lost.
-        packets: u32,
+        /// Scans discarded beyond the buffer's contents.
+        scans: u32,
     },
-    /// An overflow the device cannot recover from: it reports a buffer-overrun `Error` and `Stopped`.
+    /// An overflow auto-recovery cannot count: the next packet carries errorcode 63 and the stream ends.
     FatalOverrun,
+    /// The first StreamData packet of this read is lost in transit (the host sees a PacketNumber gap).
+    DropPacket,
 }
 
 /// Stream of [`FaultSchedule::seeded`]'s draws ("faults" in ASCII).
@@ -39,8 +41,10 @@ pub struct FaultRates {
     pub max_stall_reads: u32,
     /// Probability of a disconnect.
     pub disconnect: f64,
-    /// Probability of a recoverable overrun of 1 to 4 packets.
+    /// Probability of a recoverable overrun of 1 to 100 scans.
     pub overrun: f64,
+    /// Probability that a stream read loses its first packet in transit.
+    pub drop_packet: f64,
 }
 
 /// Faults by IN-transfer number (0 for the host's first read attempt), in order.
@@ -74,6 +78,7 @@ impl FaultSchedule {
         let stall = probability(rates.stall);
         let disconnect = probability(rates.disconnect);
         let overrun = probability(rates.overrun);
+        let drop_packet = probability(rates.drop_packet);
         let mut events = Vec::new();
         for read_index in 0..horizon_reads {
             let u = rng.uniform();
@@ -82,7 +87,9 @@ impl FaultSchedule {
             } else if u < stall + disconnect {
                 Fault::Disconnect
             } else if u < stall + disconnect + overrun {
-                Fault::Overrun { packets: rng.in_range(1, 4) as u32 }
+                Fault::Overrun { scans: rng.in_range(1, 100) as u32 }
+            } else if u < stall + disconnect + overrun + drop_packet {
+                Fault::DropPacket
             } else {
                 continue;
             };

@@ -1,25 +1,26 @@
-//! The mock DAQ behind an in-process [`BulkTransport`], with scheduled faults.
+//! The mock U6 behind an in-process [`BulkTransport`], with scheduled faults.
 
 use std::time::Duration;
 
 use metaplate_daq::{BulkTransport, TransportError};
-use metaplate_daq_protocol::MAX_FRAME_LEN;
 
-use crate::device::MockDaq;
+use crate::device::MockU6;
 use crate::faults::{Fault, FaultSchedule};
 
-/// The largest IN transfer the mock sends, bytes: four maximum frames (a real device's bulk buffer is similar).
-pub const MAX_TRANSFER_LEN: usize = 4 * MAX_FRAME_LEN;
-
-/// An in-process bulk transport to a [`MockDaq`]. It never blocks: a read with nothing to deliver returns
+/// An in-process bulk transport to a [`MockU6`]. It never blocks: a read with nothing to deliver returns
 /// [`TransportError::Timeout`] at once, whatever the timeout, so no test waits.
+///
+/// A stream read returns as many whole packets as `max_len` holds (at least one). A real U6 ends a USB transfer
+/// at a packet shorter than 64 bytes, so it sends several packets per transfer only at 25 samples per packet; the
+/// codec and the driver take any number, and the mock's larger transfers keep the mock lab fast.
 #[derive(Debug)]
 pub struct MockTransport {
-    device: MockDaq,
+    device: MockU6,
     faults: FaultSchedule,
-    /// IN transfers attempted so far (the fault schedule's key).
+    /// IN transfers attempted so far, on either endpoint (the fault schedule's key).
     reads: u64,
     stall_reads_left: u32,
+    drop_next_packet: bool,
     connected: bool,
     written: Vec<Vec<u8>>,
     reopens: u64,
@@ -27,17 +28,32 @@ pub struct MockTransport {
 
 impl MockTransport {
     /// A connected transport to `device`, injecting `faults`.
-    pub fn new(device: MockDaq, faults: FaultSchedule) -> Self {
-        Self { device, faults, reads: 0, stall_reads_left: 0, connected: true, written: Vec::new(), reopens: 0 }
+    pub fn new(device: MockU6, faults: FaultSchedule) -> Self {
+        Self {
+            device,
+            faults,
+            reads: 0,
+            stall_reads_left: 0,
+            drop_next_packet: false,
+            connected: true,
+            written: Vec::new(),
+            reopens: 0,
+        }
+    }
+
+    /// Replaces the fault schedule (keyed by IN-transfer number since the transport was made, so faults at
+    /// transfers already made never fire).
+    pub fn set_faults(&mut self, faults: FaultSchedule) {
+        self.faults = faults;
     }
 
     /// The device (to inspect its state).
-    pub fn device(&self) -> &MockDaq {
+    pub fn device(&self) -> &MockU6 {
         &self.device
     }
 
     /// The device, mutably (to inject a fault by hand).
-    pub fn device_mut(&mut self) -> &mut MockDaq {
+    pub fn device_mut(&mut self) -> &mut MockU6 {
         &mut self.device
     }
 
@@ -62,21 +78,11 @@ impl MockTransport {
     }
 
     fn disconnected() -> TransportError {
-        TransportError::Disconnected("mock DAQ is off the bus".into())
-    }
-}
-
-impl BulkTransport for MockTransport {
-    fn write(&mut self, bytes: &[u8], _timeout: Duration) -> Result<(), TransportError> {
-        if !self.connected {
-            return Err(Self::disconnected());
-        }
-        self.written.push(bytes.to_vec());
-        self.device.receive(bytes);
-        Ok(())
+        TransportError::Disconnected("mock U6 is off the bus".into())
     }
 
-    fn read(&mut self, _timeout: Duration) -> Result<Vec<u8>, TransportError> {
+    /// Applies the faults due at this IN transfer; `Err` if the transfer fails.
+    fn before_read(&mut self) -> Result<(), TransportError> {
         if !self.connected {
             return Err(Self::disconnected());
         }
@@ -92,15 +98,47 @@ impl BulkTransport for MockTransport {
                     self.device.power_cycle();
                     return Err(Self::disconnected());
                 }
-                Fault::Overrun { packets } => self.device.overrun(packets),
-                Fault::FatalOverrun => self.device.fatal_overrun(),
+                Fault::Overrun { scans } => self.device.overflow(u64::from(scans)),
+                Fault::FatalOverrun => self.device.fatal_overflow(),
+                Fault::DropPacket => self.drop_next_packet = true,
             }
         }
         if self.stall_reads_left > 0 {
             self.stall_reads_left -= 1;
             return Err(TransportError::Timeout);
         }
-        self.device.next_transfer(MAX_TRANSFER_LEN).ok_or(TransportError::Timeout)
+        Ok(())
+    }
+}
+
+impl BulkTransport for MockTransport {
+    fn write(&mut self, bytes: &[u8], _timeout: Duration) -> Result<(), TransportError> {
+        if !self.connected {
+            return Err(Self::disconnected());
+        }
+        self.written.push(bytes.to_vec());
+        self.device.receive(bytes);
+        Ok(())
+    }
+
+    fn read(&mut self, _timeout: Duration) -> Result<Vec<u8>, TransportError> {
+        self.before_read()?;
+        self.device.next_response().ok_or(TransportError::Timeout)
+    }
+
+    fn read_stream(&mut self, max_len: usize, _timeout: Duration) -> Result<Vec<u8>, TransportError> {
+        self.before_read()?;
+        let packet_len =
+            self.device.config().map_or(usize::MAX, |c| metaplate_u6_protocol::packet_len(c.samples_per_packet));
+        let mut bytes =
+            self.device.next_stream_transfer((max_len / packet_len).max(1)).ok_or(TransportError::Timeout)?;
+        if std::mem::take(&mut self.drop_next_packet) {
+            bytes.drain(..packet_len.min(bytes.len()));
+            if bytes.is_empty() {
+                return Err(TransportError::Timeout);
+            }
+        }
+        Ok(bytes)
     }
 
     fn reopen(&mut self) -> Result<(), TransportError> {

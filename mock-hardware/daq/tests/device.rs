@@ -1,67 +1,110 @@
-//! The mock device replays the protocol's documented example byte for byte (protocols/daq/src/lib.rs), except the
-//! sample packet, whose contents come from the signal source.
+//! The mock U6 answers as the User's Guide (section 5.2) and LabJackPython describe the device: identity,
+//! calibration memory, stream errorcodes, StreamData packets, auto-recovery after an overflow.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // tests may unwrap: a panic is the test failing
+use metaplate_mock_daq::{MockU6, u6_info};
+use metaplate_u6_protocol::{
+    BAD_CHECKSUM_RESPONSE, Calibration, Command, Errorcode, Gain, Response, ResponseBody, StreamChannel, StreamClock,
+    StreamConfig, StreamDecoder, StreamPacket,
+};
 
-use metaplate_daq_protocol::{DeviceMessage, HostDecoder};
-use metaplate_mock_daq::{Fault, FaultSchedule, MockDaq, usb6211_info};
-
-fn hex(text: &str) -> Vec<u8> {
-    text.split_whitespace().map(|b| u8::from_str_radix(b, 16).unwrap()).collect()
+fn device() -> MockU6 {
+    // AIN0 carries 1 V, AIN1 carries -2 V.
+    let source = |input: u8, _first: u64, _rate: f64, out: &mut [f64]| out.fill(if input == 0 { 1.0 } else { -2.0 });
+    MockU6::new(u6_info(360_012_345), Calibration::nominal(), Box::new(source))
 }
 
-fn exchange(device: &mut MockDaq, command: &str) -> Vec<u8> {
-    device.receive(&hex(command));
-    // Replies are queued, so one transfer carries them all (no packet is produced while any is queued).
-    device.next_transfer(1 << 20).unwrap_or_default()
+fn exchange(u6: &mut MockU6, command: &Command) -> Response {
+    u6.receive(&command.encode().unwrap());
+    Response::decode_for(command, &u6.next_response().unwrap()).unwrap()
 }
 
-#[test]
-fn documented_example_replies_are_byte_exact() {
-    let mut device = MockDaq::new(
-        usb6211_info("SN0001"),
-        Box::new(|_: u8, _: u64, _: f64, out: &mut [f64]| {
-            out.fill(0.5);
-        }),
-    )
-    .unwrap();
-    let info = "4d 44 01 81 00 00 00 00 00 00 33 00 00 00 00 00 10 90 d0 03 00 04 10 27 88 13 e8 03 c8 00 09 6d 65 \
-        74 61 70 6c 61 74 65 09 6d 6f 63 6b 2d 36 32 31 31 06 53 4e 30 30 30 31 05 31 2e 30 2e 30 06 3f 59 01";
-    assert_eq!(exchange(&mut device, "4d 44 01 01 00 00 00 00 00 00 00 00 61 65 31 4b"), hex(info));
-    let configure = "4d 44 01 02 00 00 01 00 00 00 0d 00 c0 5d 00 00 f0 00 02 00 10 27 01 10 27 3b 99 9f fc";
-    assert_eq!(exchange(&mut device, configure), hex("4d 44 01 82 00 00 01 00 00 00 04 00 01 00 00 00 8f de de 1a"));
-    let start = "4d 44 01 03 00 00 02 00 00 00 00 00 ec ec 0f 28";
-    assert_eq!(exchange(&mut device, start), hex("4d 44 01 82 00 00 02 00 00 00 04 00 02 00 00 00 62 ca 5c e3"));
-    // One packet (device seq 3): packet 0 from sample 0, 240 samples of 0.5 V on +/-10 V = code 1638.4 -> 1638.
-    let mut decoder = HostDecoder::new();
-    decoder.push(&device.next_transfer(1 << 20).unwrap());
-    let frame = decoder.poll().unwrap().unwrap();
-    assert_eq!(frame.seq, 3);
-    let DeviceMessage::Samples(packet) = frame.message else { panic!("expected samples") };
-    assert_eq!((packet.packet_seq, packet.first_sample_index, packet.n_samples()), (0, 0, 240));
-    assert!(packet.samples.iter().all(|&c| c == 1638));
-    assert!(!packet.flags.overrun && !packet.flags.clipped);
-    let stop = "4d 44 01 04 00 00 03 00 00 00 00 00 80 52 32 87";
-    let stopped_ack = "4d 44 01 85 00 00 04 00 00 00 05 00 01 01 00 00 00 b1 c5 4e a5 \
-        4d 44 01 82 00 00 05 00 00 00 04 00 03 00 00 00 7e b6 3c b9";
-    assert_eq!(exchange(&mut device, stop), hex(stopped_ack));
-    let reset = "4d 44 01 05 00 00 04 00 00 00 00 00 7b 76 4c 8d";
-    assert_eq!(exchange(&mut device, reset), hex("4d 44 01 82 00 00 06 00 00 00 04 00 04 00 00 00 c4 35 dc cf"));
-    let start_again = "4d 44 01 03 00 00 05 00 00 00 00 00 54 dc 0a 35";
-    let not_configured = "4d 44 01 83 00 00 07 00 00 00 16 00 03 01 05 00 00 00 0f 63 6f 6e 66 69 67 75 72 65 \
-        20 66 69 72 73 74 19 08 f8 dc";
-    assert_eq!(exchange(&mut device, start_again), hex(not_configured));
-    assert!(device.next_transfer(1 << 20).is_none(), "idle and nothing queued");
+fn config() -> StreamConfig {
+    let ch = |positive| StreamChannel { positive, gain: Gain::X1, differential: false };
+    StreamConfig {
+        resolution_index: 0,
+        samples_per_packet: 4,
+        settling_factor: 0,
+        clock: StreamClock::Mhz48,
+        divide_by_256: false,
+        scan_interval: 2000,
+        channels: vec![ch(0), ch(1)],
+    }
+}
+
+fn packets(u6: &mut MockU6, count: usize) -> Vec<StreamPacket> {
+    let mut decoder = StreamDecoder::new(4);
+    decoder.push(&u6.next_stream_transfer(count).unwrap());
+    std::iter::from_fn(|| decoder.poll()).map(Result::unwrap).collect()
 }
 
 #[test]
-fn schedule_orders_faults_and_keeps_insertion_order_at_one_index() {
-    let s = FaultSchedule::none()
-        .at(5, Fault::Disconnect)
-        .at(2, Fault::Stall { reads: 1 })
-        .at(5, Fault::Overrun { packets: 2 });
-    assert_eq!(
-        s.events(),
-        &[(2, Fault::Stall { reads: 1 }), (5, Fault::Disconnect), (5, Fault::Overrun { packets: 2 })]
-    );
+fn identity_and_calibration_as_configu6_and_readcal_return_them() {
+    let mut u6 = device();
+    let r = exchange(&mut u6, &Command::ConfigU6);
+    assert_eq!(r, Response { errorcode: Errorcode::OK, body: ResponseBody::ConfigU6(u6_info(360_012_345)) });
+    let mut blocks = [[0u8; 32]; 4];
+    for block in 0..4u8 {
+        let r = exchange(&mut u6, &Command::ReadMem { calibration: true, block });
+        let ResponseBody::ReadMem { data, .. } = r.body else { panic!("{r:?}") };
+        blocks[usize::from(block)] = data;
+    }
+    assert_eq!(blocks, Calibration::nominal().to_blocks());
+    let r = exchange(&mut u6, &Command::ReadMem { calibration: true, block: 4 });
+    assert_eq!(r.errorcode, Errorcode::INVALID_BLOCK);
+}
+
+#[test]
+fn stream_errorcodes_follow_the_device_state() {
+    let mut u6 = device();
+    assert_eq!(exchange(&mut u6, &Command::StreamStop).errorcode, Errorcode::STREAM_NOT_RUNNING);
+    assert_eq!(exchange(&mut u6, &Command::StreamStart).errorcode, Errorcode::STREAM_CONFIG_INVALID);
+    let mut bad = config();
+    bad.samples_per_packet = 26;
+    assert_eq!(exchange(&mut u6, &Command::StreamConfig(bad)).errorcode, Errorcode::STREAM_SAMPLE_NUM_INVALID);
+    assert_eq!(exchange(&mut u6, &Command::StreamConfig(config())).errorcode, Errorcode::OK);
+    assert_eq!(exchange(&mut u6, &Command::StreamStart).errorcode, Errorcode::OK);
+    assert_eq!(exchange(&mut u6, &Command::StreamStart).errorcode, Errorcode::STREAM_IS_ACTIVE);
+    assert_eq!(exchange(&mut u6, &Command::StreamConfig(config())).errorcode, Errorcode::STREAM_IS_ACTIVE);
+    assert_eq!(exchange(&mut u6, &Command::StreamStop).errorcode, Errorcode::OK);
+    assert!(u6.next_stream_transfer(1).is_none());
+}
+
+#[test]
+fn a_command_with_a_bad_checksum_is_answered_b8_b8() {
+    let mut u6 = device();
+    let mut bytes = Command::ConfigU6.encode().unwrap();
+    bytes[0] ^= 1;
+    u6.receive(&bytes);
+    assert_eq!(u6.next_response().unwrap(), BAD_CHECKSUM_RESPONSE);
+}
+
+#[test]
+fn packets_carry_calibrated_codes_in_scan_order() {
+    let mut u6 = device();
+    exchange(&mut u6, &Command::StreamConfig(config()));
+    exchange(&mut u6, &Command::StreamStart);
+    let got = packets(&mut u6, 3);
+    assert_eq!(got.iter().map(|p| p.packet_number).collect::<Vec<_>>(), [0, 1, 2]);
+    let cal = Calibration::from_blocks(&Calibration::nominal().to_blocks()).unwrap();
+    let (one, minus_two) = (cal.code(Gain::X1, 1.0).unwrap().0, cal.code(Gain::X1, -2.0).unwrap().0);
+    assert_eq!(got[0].samples, [one, minus_two, one, minus_two]);
+    assert!(got.iter().all(|p| p.errorcode == Errorcode::OK));
+    assert_eq!(u6.scan_index(), Some(6));
+}
+
+#[test]
+fn an_overflow_is_reported_by_errorcodes_59_then_60() {
+    let mut u6 = device();
+    exchange(&mut u6, &Command::StreamConfig(config()));
+    exchange(&mut u6, &Command::StreamStart);
+    packets(&mut u6, 1);
+    u6.overflow(10);
+    let got = packets(&mut u6, 3);
+    assert_eq!(got[0].errorcode, Errorcode::STREAM_AUTORECOVER_ACTIVE);
+    assert_eq!(got[1].errorcode, Errorcode::STREAM_AUTORECOVER_REPORT);
+    // The dummy scan first; TimeStamp counts the scans the buffer still held (the transfer digitised 3 packets'
+    // worth: 6 scans, 2 sent in the flagged packet) and the 10 discarded.
+    assert_eq!(got[1].samples[..2], [0xffff, 0xffff]);
+    assert_eq!(got[1].timestamp, 4 + 10);
+    assert_eq!(got[2].errorcode, Errorcode::OK);
 }

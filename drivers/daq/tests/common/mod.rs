@@ -1,4 +1,4 @@
-//! Shared test fixtures: hex frames, a scripted transport, sine sources and a mock-backed driver.
+//! Shared test fixtures: hex packets, a scripted transport, sine sources and a mock-backed driver.
 #![allow(dead_code)]
 
 use std::collections::VecDeque;
@@ -6,25 +6,28 @@ use std::f64::consts::PI;
 use std::time::Duration;
 
 use metaplate_core::daq::{DaqChannel, DaqConfig};
-use metaplate_daq::{BulkTransport, DaqDriver, DriverSettings, TransportError};
-use metaplate_mock_daq::{FaultSchedule, MockDaq, MockTransport, usb6211_info};
+use metaplate_daq::{BulkTransport, DriverSettings, TransportError, U6Driver};
+use metaplate_mock_daq::{FaultSchedule, MockTransport, MockU6, u6_info};
+use metaplate_u6_protocol::Calibration;
 
-/// Bytes from space-separated hex, as the protocol crate documents its example frames.
+/// Bytes from space-separated hex, as the protocol crate documents its example packets.
 pub fn hex(text: &str) -> Vec<u8> {
     text.split_whitespace().map(|b| u8::from_str_radix(b, 16).unwrap()).collect()
 }
 
-/// A transport that answers the n-th OUT transfer with the n-th list of IN transfers, and records what was written.
+/// A transport that answers the n-th OUT transfer with the n-th list of response transfers, serves `stream`
+/// transfers in order, and records what was written.
 #[derive(Debug, Default)]
 pub struct Scripted {
     pub replies: VecDeque<Vec<Vec<u8>>>,
     pub pending: VecDeque<Vec<u8>>,
+    pub stream: VecDeque<Vec<u8>>,
     pub written: Vec<Vec<u8>>,
 }
 
 impl Scripted {
-    pub fn new(replies: Vec<Vec<Vec<u8>>>) -> Self {
-        Self { replies: replies.into(), ..Self::default() }
+    pub fn new(replies: Vec<Vec<Vec<u8>>>, stream: Vec<Vec<u8>>) -> Self {
+        Self { replies: replies.into(), stream: stream.into(), ..Self::default() }
     }
 }
 
@@ -38,6 +41,13 @@ impl BulkTransport for Scripted {
     }
     fn read(&mut self, _timeout: Duration) -> Result<Vec<u8>, TransportError> {
         self.pending.pop_front().ok_or(TransportError::Timeout)
+    }
+    fn read_stream(&mut self, _max_len: usize, _timeout: Duration) -> Result<Vec<u8>, TransportError> {
+        // Stream data flows once StreamStart was sent (the drains of opening find the endpoint quiet).
+        if !self.written.iter().any(|w| w == &[0xa8, 0xa8]) {
+            return Err(TransportError::Timeout);
+        }
+        self.stream.pop_front().ok_or(TransportError::Timeout)
     }
     fn reopen(&mut self) -> Result<(), TransportError> {
         Ok(())
@@ -53,23 +63,26 @@ pub fn sine_of(input: u8) -> (f64, f64) {
     }
 }
 
-/// The analytic input voltage at sample `index`, V.
+/// The analytic input voltage at scan `index`, V.
 pub fn sine_at(input: u8, index: u64, rate_hz: f64) -> f64 {
     let (a, f) = sine_of(input);
     a * (2.0 * PI * f * index as f64 / rate_hz).sin()
 }
 
-/// A mock DAQ whose inputs carry [`sine_of`].
-pub fn sine_device() -> MockDaq {
+/// The serial number of the test U6.
+pub const SERIAL: u32 = 360_012_345;
+
+/// A mock U6 with the nominal calibration (LabJackPython's defaults) whose inputs carry [`sine_of`].
+pub fn sine_device() -> MockU6 {
     let source = |input: u8, first: u64, rate_hz: f64, out: &mut [f64]| {
         for (i, v) in out.iter_mut().enumerate() {
             *v = sine_at(input, first + i as u64, rate_hz);
         }
     };
-    MockDaq::new(usb6211_info("SN0001"), Box::new(source)).unwrap()
+    MockU6::new(u6_info(SERIAL), Calibration::nominal(), Box::new(source))
 }
 
-/// Two channels: input 0 at +/-10 V, input 3 at +/-1 V; 24 kHz; 240-sample blocks.
+/// Two channels: input 0 at +/-10 V, input 3 at +/-1 V; 24 kHz; 240-scan blocks.
 pub fn two_channels() -> DaqConfig {
     DaqConfig {
         channels: vec![DaqChannel { input: 0, range_v: 10.0 }, DaqChannel { input: 3, range_v: 1.0 }],
@@ -83,7 +96,7 @@ pub fn settings() -> DriverSettings {
     DriverSettings { retries: 2, max_drain_transfers: 8, max_transfers_per_attempt: 64, ..DriverSettings::default() }
 }
 
-/// A driver opened on a mock DAQ with sine inputs and `faults`.
-pub fn mock_driver(faults: FaultSchedule) -> DaqDriver<MockTransport> {
-    DaqDriver::open(MockTransport::new(sine_device(), faults), settings()).unwrap()
+/// A driver opened on a mock U6 with sine inputs and `faults`.
+pub fn mock_driver(faults: FaultSchedule) -> U6Driver<MockTransport> {
+    U6Driver::open(MockTransport::new(sine_device(), faults), settings()).unwrap()
 }
