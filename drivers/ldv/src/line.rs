@@ -3,7 +3,8 @@
 
 use std::path::PathBuf;
 
-/// The controller's line settings: 115200 baud, 8N1, no flow control (protocol specification, section 1).
+/// The controller's line settings: 115200 baud, 8N1, no flow control (the rate PLACE opens a Polytec controller at:
+/// `place/automate/polytec/vibrometer.py`, `baudPolytec=115200`; the interface's `BaudRate` attribute can change it).
 pub const BAUD_RATE: u32 = 115_200;
 
 /// Where to find the controller's port.

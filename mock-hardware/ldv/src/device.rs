@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use metaplate_core::clock::VirtualClock;
-use metaplate_ldv_protocol::{Command, CommandDecoder, LaserState, Reply, encode_reply};
+use metaplate_polytec_protocol::{Device, PolytecProtocolError, Reply, Request, RequestDecoder, Verb};
 
 use crate::controller::MockController;
 use crate::faults::{Fault, FaultSchedule, TimedFaults};
@@ -14,7 +14,7 @@ use crate::faults::{Fault, FaultSchedule, TimedFaults};
 #[derive(Debug)]
 pub struct MockDevice {
     controller: MockController,
-    decoder: CommandDecoder,
+    decoder: RequestDecoder,
     faults: FaultSchedule,
     lines_received: u64,
     output: Vec<u8>,
@@ -31,7 +31,7 @@ impl MockDevice {
     pub fn new(controller: MockController, faults: FaultSchedule) -> Self {
         Self {
             controller,
-            decoder: CommandDecoder::new(),
+            decoder: RequestDecoder::new(),
             faults,
             lines_received: 0,
             output: Vec::new(),
@@ -71,8 +71,8 @@ impl MockDevice {
         self.clock.as_ref().map_or(0.0, |c| c.now_s())
     }
 
-    /// Advances `clock` by each command's specified response time (section 6 of the protocol), so that a session
-    /// takes its real duration in simulated time and none in wall time.
+    /// Advances `clock` by each request's response time (20 ms for a signal level or a range change, 1 ms for the
+    /// rest), so that a session takes about its real duration in simulated time and none in wall time.
     pub fn with_clock(mut self, clock: Arc<VirtualClock>) -> Self {
         self.clock = Some(clock);
         self
@@ -83,7 +83,7 @@ impl MockDevice {
         &self.controller
     }
 
-    /// The controller, to change its state (calibration, latched fault).
+    /// The controller, to change its state (the beam, a dropout).
     pub fn controller_mut(&mut self) -> &mut MockController {
         &mut self.controller
     }
@@ -93,7 +93,7 @@ impl MockDevice {
         &self.host_log
     }
 
-    /// Non-blank lines received so far (the index the next line's fault is looked up by).
+    /// Non-empty lines received so far (the index the next line's fault is looked up by).
     pub fn lines_received(&self) -> u64 {
         self.lines_received
     }
@@ -144,11 +144,11 @@ impl MockDevice {
         self.output = bytes;
     }
 
-    fn answer(&mut self, line: Result<Command, metaplate_ldv_protocol::LdvProtocolError>) {
+    fn answer(&mut self, line: Result<Request, PolytecProtocolError>) {
         let index = self.lines_received;
         self.lines_received += 1;
-        if let (Some(clock), Ok(command)) = (&self.clock, &line) {
-            clock.advance(response_time_s(command));
+        if let (Some(clock), Ok(request)) = (&self.clock, &line) {
+            clock.advance(response_time_s(request));
         }
         let now_s = self.now_s();
         let timed = match self.timed.as_mut().and_then(|t| t.fault_at_time(now_s)) {
@@ -160,8 +160,7 @@ impl MockDevice {
             other => other,
         };
         let fault = self.faults.fault_at(index).or(timed);
-        let reply = match fault {
-            Some(Fault::Busy) => encode_reply(&busy()),
+        match fault {
             Some(Fault::Disconnect { power_cycle }) => {
                 if power_cycle {
                     self.controller.power_cycle();
@@ -170,15 +169,33 @@ impl MockDevice {
                 self.output.clear();
                 return;
             }
-            _ => encode_reply(&self.controller.answer_line(line)),
-        };
+            // The line is lost on the way: not carried out, not echoed, not answered.
+            Some(Fault::NoReply) => return,
+            _ => {}
+        }
+        // With the interface's echo on, the line comes back first (as received, before it takes effect).
+        let mut reply = Vec::new();
+        if self.controller.echo()
+            && let Ok(request) = &line
+        {
+            reply.extend_from_slice(&Reply::encode(&request.to_string()));
+        }
+        // A line that does not decode is ignored, as the manual says of invalid settings (OFV-3001 E.2.4).
+        if let Some(text) = line.ok().and_then(|request| self.controller.answer(&request)) {
+            reply.extend_from_slice(&Reply::encode(&text));
+        }
         // A reply held back from the previous line goes out first: it is now stale.
         if let Some(late) = self.held_back.take() {
             self.output.extend_from_slice(&late);
         }
+        if reply.is_empty() {
+            if let Some(Fault::Dropout { queries }) = fault {
+                self.controller.start_dropout(queries);
+            }
+            return;
+        }
         let draw = self.faults.draw(index);
         match fault {
-            Some(Fault::NoReply) => {}
             Some(Fault::LateReply) => self.held_back = Some(reply),
             Some(Fault::GarbledReply) => self.output.extend_from_slice(&garble(reply, draw)),
             Some(Fault::PartialReply) => self.output.extend_from_slice(cut(&reply, draw)),
@@ -186,21 +203,15 @@ impl MockDevice {
                 self.controller.start_dropout(queries);
                 self.output.extend_from_slice(&reply);
             }
-            None | Some(Fault::Busy) | Some(Fault::Disconnect { .. }) => self.output.extend_from_slice(&reply),
+            None | Some(Fault::NoReply) | Some(Fault::Disconnect { .. }) => self.output.extend_from_slice(&reply),
         }
     }
 }
 
-fn busy() -> Reply {
-    Reply::Error {
-        code: metaplate_ldv_protocol::ErrorCode::Busy,
-        text: metaplate_ldv_protocol::ErrorText::lossy("under front-panel control; retry after 100 ms"),
-    }
-}
-
-/// Sets the top bit of one byte before the terminator (CR LF), chosen by `draw`.
+/// Sets the top bit of one byte before the terminator (LF), chosen by `draw`: a lone byte of 0x80 or more is never
+/// valid UTF-8, so the line cannot decode.
 fn garble(mut reply: Vec<u8>, draw: u64) -> Vec<u8> {
-    let content = reply.len().saturating_sub(2).max(1) as u64;
+    let content = reply.len().saturating_sub(1).max(1) as u64;
     if let Some(byte) = usize::try_from(draw % content).ok().and_then(|i| reply.get_mut(i)) {
         *byte |= 0x80;
     }
@@ -209,20 +220,17 @@ fn garble(mut reply: Vec<u8>, draw: u64) -> Vec<u8> {
 
 /// A prefix of the reply without its terminator: 1 to (content length) bytes, chosen by `draw`.
 fn cut(reply: &[u8], draw: u64) -> &[u8] {
-    let content = reply.len().saturating_sub(2).max(1) as u64;
+    let content = reply.len().saturating_sub(1).max(1) as u64;
     let len = usize::try_from(1 + draw % content).unwrap_or(1);
     reply.get(..len).unwrap_or(reply)
 }
 
-/// The specified time from a command's terminator to its reply, s (protocol section 6): moves 2 ms plus
-/// 0.5 ms per degree are approximated by their 5 mm grid-step value; `SIG?` 20 ms; `LASER ON` 1 s; `*RST` 2 s;
-/// everything else 1 ms.
-fn response_time_s(command: &Command) -> f64 {
-    match command {
-        Command::MoveTo(_) | Command::MoveToAngles(_) => 0.0022,
-        Command::QuerySignal | Command::SetVelocityRange(_) => 0.02,
-        Command::SetLaser(LaserState::On) => 1.0,
-        Command::Reset => 2.0,
+/// The time from a request's terminator to its effect or reply, s: a signal level or range change 20 ms (the
+/// decoder settles), anything else 1 ms (a few characters at 115200 baud and the controller's turn-around). The
+/// manual gives no figures; these are the order of magnitude a host waits.
+fn response_time_s(request: &Request) -> f64 {
+    match (request.verb(), request.device(), request.attribute()) {
+        (Verb::Get, Device::SignalLevel, _) | (Verb::Set, Device::VeloDec, "Range") => 0.02,
         _ => 0.001,
     }
 }

@@ -4,11 +4,11 @@ use std::collections::BTreeMap;
 
 use crate::speckle::{mix, unit};
 
-/// A fault applied to the reply of one received line (lines count from 0 at power-on, every non-blank line,
-/// `SYNC` included).
+/// A fault applied to one received line (lines count from 0 at power-on, every non-empty line). A `Set` gets no
+/// reply, so the reply faults leave it alone, except [`Fault::NoReply`]: the line is lost and not carried out.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Fault {
-    /// The line gets no reply at all (the driver times out).
+    /// The line is lost: not carried out, no reply (the driver times out, or reads a `Set` back unchanged).
     NoReply,
     /// The reply is held back and sent just before the reply to the next line, where it is stale.
     LateReply,
@@ -16,16 +16,14 @@ pub enum Fault {
     GarbledReply,
     /// Only a prefix of the reply is sent (at least 1 byte, no terminator; length chosen by the seed).
     PartialReply,
-    /// The controller answers `ERR 7` (busy) instead of carrying the command out.
-    Busy,
     /// The line is lost and the link goes down: every read and write fails until the host reopens. With
-    /// `power_cycle`, the controller comes back with power-on defaults (laser off, default range), as after a
-    /// power failure.
+    /// `power_cycle`, the controller comes back with power-on defaults (remote off, echo as at power-up, each
+    /// decoder at its default range and filters), as after a power failure.
     Disconnect {
         /// Whether the controller loses its settings.
         power_cycle: bool,
     },
-    /// The line is answered normally, and the next `queries` `SIG?` queries report a dropout.
+    /// The line is answered normally, and the next `queries` signal-level queries report a dropout.
     Dropout {
         /// How many signal queries read low.
         queries: u32,
@@ -36,7 +34,7 @@ pub enum Fault {
 /// line the device answers, with the device's virtual clock reading.
 pub trait TimedFaults: Send + std::fmt::Debug {
     /// The fault for a line answered at `now_s` (simulated time, s), if any. [`Fault::Dropout`] here makes the
-    /// line's own `SIG?` (and the next `queries - 1`) read low.
+    /// line's own signal-level query (and the next `queries - 1`) read low.
     fn fault_at_time(&mut self, now_s: f64) -> Option<Fault>;
 
     /// Whether a dropped link may come back at `now_s` (false while the device is still absent); a true answer

@@ -25,9 +25,10 @@
 //!   to file, line, column and dotted key path, with hints for unit mistakes (the unit is in each key's name); scene
 //!   files and `metaplate-experiment`'s experiment files both report through it.
 //! - The capability traits, in SI units, behind which a recipe sees its instruments and never a transport:
-//!   [`Vibrometer`](vibrometer::Vibrometer), [`Daq`](daq::Daq) and [`AudioOut`](audio::AudioOut). Each error says
+//!   [`Vibrometer`](vibrometer::Vibrometer), [`Aim`](aim::Aim) (what puts the beam on a point: mirrors, stages,
+//!   the mock lab), [`Daq`](daq::Daq) and [`AudioOut`](audio::AudioOut). Each error says
 //!   what the caller can do next (retry, reconnect or reopen, stop).
-//! - [`rig`]: [`Rig`](rig::Rig) (the three instruments, the clock they share, and their [`Wiring`](rig::Wiring))
+//! - [`rig`]: [`Rig`](rig::Rig) (the instruments, the clock they share, and their [`Wiring`](rig::Wiring))
 //!   and [`Rig::play_and_record`](rig::Rig::play_and_record), the one play-and-record: start the DAQ, play, read to a
 //!   length, stop; no retries (retrying is the caller's policy).
 //! - [`clock`]: [`Clock`](clock::Clock), with [`RealClock`](clock::RealClock) for the lab and
@@ -49,6 +50,7 @@
 //! - Seeded draws are bit-identical on every platform and with every dependency version: library code draws from
 //!   [`rng`] only.
 
+pub mod aim;
 pub mod audio;
 pub mod clock;
 pub mod daq;

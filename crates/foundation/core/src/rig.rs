@@ -5,6 +5,7 @@
 
 use std::sync::Arc;
 
+use crate::aim::Aim;
 use crate::audio::{AudioConfig, AudioError, AudioOut};
 use crate::clock::Clock;
 use crate::daq::{Daq, DaqChannel, DaqConfig, DaqError};
@@ -122,8 +123,10 @@ pub enum PlayRecordError {
 
 /// The instruments of one lab, as capabilities, with their wiring and the clock they share.
 pub struct Rig {
-    /// The scanning vibrometer.
+    /// The vibrometer.
     pub vibrometer: Box<dyn Vibrometer + Send>,
+    /// What puts the vibrometer's beam on a point of the plate.
+    pub aim: Box<dyn Aim + Send>,
     /// The DAQ recording velocity and loopback.
     pub daq: Box<dyn Daq + Send>,
     /// The audio interface driving the actuators.

@@ -1,18 +1,20 @@
-//! The `Vibrometer` capability: what a recipe may ask of a scanning laser Doppler vibrometer, in SI units.
+//! The `Vibrometer` capability: what a recipe may ask of a laser Doppler vibrometer's controller, in SI units.
 //!
-//! A recipe sees this trait, never a serial line: the real driver (`metaplate-ldv`) and any stand-in implement it.
+//! A recipe sees this trait, never a serial line: the real driver (`metaplate-ldv`: a Polytec controller over
+//! RS-232, or an analog-only vibrometer) and any stand-in implement it. Where the beam lands is another
+//! capability, [`Aim`](crate::aim::Aim).
 //! Its error tells a recipe what it can do next: retry later, [`Vibrometer::reconnect`], or stop.
 
 /// The instrument's identity, as reported by the controller (for the dataset manifest).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct VibrometerIdentity {
-    /// Manufacturer, for example `Ometron`.
+    /// Manufacturer, for example `Polytec`.
     pub vendor: String,
-    /// Model, for example `8330`.
+    /// Model: for a Polytec, the controller's name, its sensor head and the velocity decoder in use.
     pub model: String,
-    /// Serial number: what a reopen looks the instrument up by.
+    /// Serial number, where the instrument reports one (a Polytec's RS-232 interface does not: the text says so).
     pub serial: String,
-    /// Firmware version.
+    /// Firmware versions (controller, sensor head).
     pub firmware: String,
 }
 
@@ -58,11 +60,11 @@ pub enum VibrometerError {
         /// What the transport reported.
         reason: String,
     },
-    /// The instrument refused the command with an error code of its own (for example laser off, not calibrated,
-    /// hardware fault). Retrying the same command will fail the same way until the cause is fixed.
+    /// The instrument refused the command or lacks what was asked (a range not on the unit's decoder, a setting
+    /// it does not take). Retrying the same command will fail the same way until the cause is fixed.
     #[error("vibrometer error {code}: {message}")]
     Device {
-        /// The instrument's error code (for the LDV protocol: 1 to 8).
+        /// The driver's code for the refusal (0 when the instrument gives none).
         code: u8,
         /// The instrument's text, and what the code means.
         message: String,
@@ -74,8 +76,8 @@ pub enum VibrometerError {
         /// What was wrong.
         detail: String,
     },
-    /// The caller asked for something outside the documented range (non-finite or out-of-range coordinate, a
-    /// velocity range larger than any the instrument offers). Nothing was sent.
+    /// The caller asked for something outside the documented range (a non-finite velocity, a velocity range
+    /// larger than any the instrument offers). Nothing was sent.
     #[error("invalid vibrometer request: {detail}")]
     InvalidArgument {
         /// Which argument, its value and its valid range.
@@ -91,7 +93,7 @@ impl VibrometerError {
     }
 }
 
-/// A scanning laser Doppler vibrometer as a recipe uses it. Coordinates are in the calibrated plate frame, metres.
+/// A laser Doppler vibrometer as a recipe uses it (the beam is aimed through [`Aim`](crate::aim::Aim)).
 pub trait Vibrometer {
     /// The instrument's identity.
     ///
@@ -99,25 +101,16 @@ pub trait Vibrometer {
     /// Any [`VibrometerError`] but `InvalidArgument`.
     fn identify(&mut self) -> Result<VibrometerIdentity, VibrometerError>;
 
-    /// Moves the beam to (`x_m`, `y_m`) in the calibrated plate frame, m; returns once the beam has settled.
-    /// Valid range: finite, within the instrument's field (for the LDV protocol plus or minus 0.5 m, rounded to
-    /// 1 um, and mirror angles within plus or minus 25 degrees).
-    ///
-    /// # Errors
-    /// `InvalidArgument` for a non-finite or out-of-field coordinate (nothing sent); `Device` when the instrument
-    /// refuses (not calibrated, out of its mirrors' reach, hardware fault); `Timeout`, `Disconnected`, `Protocol`.
-    fn move_to(&mut self, x_m: f64, y_m: f64) -> Result<(), VibrometerError>;
-
     /// The returned signal level at the current spot, as a fraction from 0 (no signal) to 1 (full scale). Below
     /// about 0.2 a recording risks dropouts.
     ///
     /// # Errors
-    /// `Device` when the laser is off; `Timeout`, `Disconnected`, `Protocol`.
+    /// `Device` when the instrument reports no level; `Timeout`, `Disconnected`, `Protocol`.
     fn signal_level(&mut self) -> Result<f64, VibrometerError>;
 
     /// Selects the most sensitive velocity range whose full scale is at least `max_velocity_m_s` and returns it.
-    /// Valid range: finite, `0 < max_velocity_m_s <=` the instrument's largest full scale (10 m/s for the LDV
-    /// protocol).
+    /// Valid range: finite, `0 < max_velocity_m_s <=` the instrument's largest full scale (the ranges of the
+    /// unit's decoder, as it reports them).
     ///
     /// # Errors
     /// `InvalidArgument` for a non-finite, non-positive or too-large velocity (nothing sent); `Device`, `Timeout`,
@@ -130,14 +123,8 @@ pub trait Vibrometer {
     /// `Device`, `Timeout`, `Disconnected`, `Protocol`.
     fn set_tracking(&mut self, tracking: Tracking) -> Result<(), VibrometerError>;
 
-    /// Switches the laser on (returns once it is stable, up to a few seconds) or off.
-    ///
-    /// # Errors
-    /// `Device`, `Timeout`, `Disconnected`, `Protocol`.
-    fn set_laser(&mut self, on: bool) -> Result<(), VibrometerError>;
-
-    /// Reopens the link to the instrument and re-applies every setting made through this handle (laser, velocity
-    /// range, tracking, beam position), so that a recipe can repeat the step that failed.
+    /// Reopens the link to the instrument and re-applies every setting made through this handle (velocity range,
+    /// tracking), so that a recipe can repeat the step that failed.
     ///
     /// # Errors
     /// `Disconnected` when the instrument cannot be reopened (yet); any error of re-applying a setting.
@@ -150,12 +137,13 @@ mod tests {
 
     #[test]
     fn only_link_failures_suggest_reconnect() {
-        let timeout = VibrometerError::Timeout { command: "SIG?".into(), detail: "3 attempts".into() };
+        let timeout =
+            VibrometerError::Timeout { command: "Get,SignalLevel,0,Value".into(), detail: "3 attempts".into() };
         let gone = VibrometerError::Disconnected { reason: "port vanished".into() };
-        let device = VibrometerError::Device { code: 6, message: "laser off".into() };
-        let bad = VibrometerError::InvalidArgument { detail: "x_m = NaN".into() };
+        let device = VibrometerError::Device { code: 6, message: "range not on the decoder".into() };
+        let bad = VibrometerError::InvalidArgument { detail: "max_velocity_m_s = NaN".into() };
         assert!(timeout.suggests_reconnect() && gone.suggests_reconnect());
         assert!(!device.suggests_reconnect() && !bad.suggests_reconnect());
-        assert_eq!(device.to_string(), "vibrometer error 6: laser off");
+        assert_eq!(device.to_string(), "vibrometer error 6: range not on the decoder");
     }
 }

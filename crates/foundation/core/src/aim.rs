@@ -1,0 +1,132 @@
+//! The `Aim` capability: putting the vibrometer's beam on a point of the plate, apart from the vibrometer itself.
+//!
+//! A single-point vibrometer measures where its beam lands; what moves the beam is another instrument: galvanometer
+//! mirrors driven by two analog outputs, motorised XY stages under the head or the plate, or (in the mock lab) the
+//! lab itself. A recipe sees this trait and never the mechanism. Coordinates are in the plate frame, metres.
+
+/// Why an aim failed, grouped by what the caller can do about it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AimError {
+    /// The point is outside what the aimer can reach (beyond the mirrors' angles or the stages' travel). Nothing
+    /// moved; [`Aim::check_reachable`] says so before a run starts.
+    #[error("({x_m} m, {y_m} m) is out of the aimer's reach: {detail}")]
+    Unreachable {
+        /// The point asked for, m.
+        x_m: f64,
+        /// The point asked for, m.
+        y_m: f64,
+        /// The aimer's range, and which limit the point passes.
+        detail: String,
+    },
+    /// A non-finite coordinate. Nothing moved.
+    #[error("invalid aim request: {detail}")]
+    InvalidArgument {
+        /// Which argument and its value.
+        detail: String,
+    },
+    /// The aimer's link is gone or it did not answer in time. Recoverable: [`Aim::reconnect`] reopens it and aims
+    /// again at the last point.
+    #[error("aimer disconnected: {reason}")]
+    Disconnected {
+        /// What the transport reported.
+        reason: String,
+    },
+    /// The aimer refused or failed (a stage at a limit switch, a mirror driver fault): retrying fails the same way.
+    #[error("aimer error: {message}")]
+    Device {
+        /// The instrument's report.
+        message: String,
+    },
+    /// No aiming instrument is configured for this rig.
+    #[error("no aiming instrument: {detail}")]
+    Unavailable {
+        /// What is missing and where to configure it.
+        detail: String,
+    },
+}
+
+impl AimError {
+    /// Whether [`Aim::reconnect`] is the documented way out of this error ([`AimError::Disconnected`]).
+    pub fn suggests_reconnect(&self) -> bool {
+        matches!(self, AimError::Disconnected { .. })
+    }
+}
+
+/// What puts the beam on a point of the plate.
+pub trait Aim {
+    /// Whether (`x_m`, `y_m`) is within reach, m; asks nothing of the instrument, so a recipe checks every point
+    /// of a run before the run starts.
+    ///
+    /// # Errors
+    /// `InvalidArgument` for a non-finite coordinate; `Unreachable` outside the aimer's range; `Unavailable` when
+    /// there is no aimer.
+    fn check_reachable(&self, x_m: f64, y_m: f64) -> Result<(), AimError>;
+
+    /// Puts the beam on (`x_m`, `y_m`) in the plate frame, m; returns once it has settled.
+    ///
+    /// # Errors
+    /// As [`Aim::check_reachable`] (nothing moved), then `Disconnected` or `Device`.
+    fn aim_at(&mut self, x_m: f64, y_m: f64) -> Result<(), AimError>;
+
+    /// Reopens the link to the aimer and aims again at the last point reached, if any.
+    ///
+    /// # Errors
+    /// `Disconnected` when the aimer cannot be reopened (yet); any error of aiming again.
+    fn reconnect(&mut self) -> Result<(), AimError>;
+}
+
+/// The aimer of a rig that has none configured: every point is refused, naming why, so a run stops before it starts.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct NoAimer {
+    /// Why there is none, for the error (for example which hardware-file section to add).
+    pub detail: String,
+}
+
+impl Aim for NoAimer {
+    fn check_reachable(&self, _x_m: f64, _y_m: f64) -> Result<(), AimError> {
+        Err(AimError::Unavailable { detail: self.detail.clone() })
+    }
+
+    fn aim_at(&mut self, x_m: f64, y_m: f64) -> Result<(), AimError> {
+        self.check_reachable(x_m, y_m)
+    }
+
+    fn reconnect(&mut self) -> Result<(), AimError> {
+        Ok(())
+    }
+}
+
+/// Checks that (`x_m`, `y_m`) is finite and within `half_width_m` of the origin on each axis: the usual first half
+/// of an [`Aim::check_reachable`] for a rectangular range.
+///
+/// # Errors
+/// `InvalidArgument` for a non-finite coordinate; `Unreachable` outside the rectangle.
+pub fn check_within(x_m: f64, y_m: f64, half_width_m: f64) -> Result<(), AimError> {
+    if !x_m.is_finite() || !y_m.is_finite() {
+        return Err(AimError::InvalidArgument { detail: format!("x_m = {x_m}, y_m = {y_m}: not finite") });
+    }
+    if x_m.abs() > half_width_m || y_m.abs() > half_width_m {
+        return Err(AimError::Unreachable { x_m, y_m, detail: format!("range is +/- {half_width_m} m on each axis") });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_aimer_refuses_and_only_link_failures_suggest_reconnect() {
+        let mut none = NoAimer { detail: "add an [aim] section".into() };
+        assert!(matches!(none.aim_at(0.0, 0.0), Err(AimError::Unavailable { .. })));
+        assert!(AimError::Disconnected { reason: "gone".into() }.suggests_reconnect());
+        assert!(!AimError::Device { message: "limit".into() }.suggests_reconnect());
+    }
+
+    #[test]
+    fn rectangle_check_names_the_failure() {
+        assert_eq!(check_within(0.5, -0.5, 0.5), Ok(()));
+        assert!(matches!(check_within(0.5001, 0.0, 0.5), Err(AimError::Unreachable { .. })));
+        assert!(matches!(check_within(f64::NAN, 0.0, 0.5), Err(AimError::InvalidArgument { .. })));
+    }
+}

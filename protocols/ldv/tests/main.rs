@@ -1,7 +1,0 @@
-//! The crate's integration tests, one binary: each file a module.
-
-#![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
-
-mod exchange;
-mod malformed;
-mod roundtrip;
