@@ -12,6 +12,7 @@ mod commands;
 mod common;
 mod crash;
 mod demo;
+mod design;
 mod experiment;
 mod experiment_run;
 mod focus;

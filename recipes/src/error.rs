@@ -1,5 +1,6 @@
 //! Why a recipe stopped.
 
+use metaplate_core::aim::AimError;
 use metaplate_core::audio::AudioError;
 use metaplate_core::daq::DaqError;
 use metaplate_core::vibrometer::VibrometerError;
@@ -24,6 +25,9 @@ pub enum RecipeError {
     /// The vibrometer failed in a way recovery cannot fix (it refuses the command).
     #[error(transparent)]
     Vibrometer(#[from] VibrometerError),
+    /// The aimer refused a point or failed in a way recovery cannot fix.
+    #[error(transparent)]
+    Aim(#[from] AimError),
     /// The DAQ failed in a way recovery cannot fix.
     #[error(transparent)]
     Daq(#[from] DaqError),

@@ -13,7 +13,7 @@ use metaplate_core::clock::Clock;
 use metaplate_core::scene::{FaultKind, FaultSpec};
 use metaplate_recipes::RecoveryPolicy;
 use metaplate_recipes::scan::{ScanConfig, scan};
-use metaplate_recipes::{Event, RunControl};
+use metaplate_recipes::{Event, Phase, RunControl};
 use metaplate_store::{Dataset, Status};
 
 fn at(kind: FaultKind, at_s: f64, duration_s: f64) -> FaultSpec {
@@ -29,11 +29,12 @@ const PAUSE_AFTER_S: f64 = 30.0;
 const LDV_WINDOWS: [(FaultKind, f64); 3] =
     [(FaultKind::SerialTimeout, 10.0), (FaultKind::GarbledReply, 50.0), (FaultKind::PartialReply, 90.0)];
 /// Faults that spoil a recording (detected as a gap, a clip or a low SNR), at these times; each window is longer
-/// than the silent gap between two playbacks (under 0.2 s), so it meets a recording.
+/// than the silent gap between two playbacks (under 0.2 s), so it meets a recording. They are 25 s apart, more than
+/// a point (~21 s), so that each meets a point of its own: a point hit twice is re-measured once.
 const DATA_FAULTS: [(FaultKind, f64, f64); 3] =
-    [(FaultKind::DaqOverrun, 140.0, 0.5), (FaultKind::AudioUnderrun, 155.0, 0.3), (FaultKind::LdvDropout, 170.0, 1.0)];
+    [(FaultKind::DaqOverrun, 140.0, 0.5), (FaultKind::AudioUnderrun, 165.0, 0.3), (FaultKind::LdvDropout, 190.0, 1.0)];
 const USB_STALL: (f64, f64) = (125.0, 3.0);
-const DISCONNECT: (f64, f64) = (185.0, 45.0);
+const DISCONNECT: (f64, f64) = (215.0, 45.0);
 
 #[test]
 fn a_scan_through_every_fault_kind_completes_and_remeasures_or_flags_what_they_hit() {
@@ -43,8 +44,8 @@ fn a_scan_through_every_fault_kind_completes_and_remeasures_or_flags_what_they_h
     scene.faults.push(at(FaultKind::UsbStall, USB_STALL.0, USB_STALL.1));
     scene.faults.push(at(FaultKind::Disconnect, DISCONNECT.0, DISCONNECT.1));
     let (lab, plan) = lab_and_plan(&scene, 7, 5);
-    // 14 points of ~21 s each, plus the stalls: the scan outlasts the last fault window (230 s).
-    let plan = prefix(&plan, 14);
+    // 16 points of ~21 s each, plus the stalls: the scan outlasts the last fault window (260 s).
+    let plan = prefix(&plan, 16);
     let mut rig = lab.rig().unwrap();
     let dir = tempfile::tempdir().unwrap();
     let cfg = ScanConfig {
@@ -94,8 +95,20 @@ fn a_scan_through_every_fault_kind_completes_and_remeasures_or_flags_what_they_h
     let pause_at = DISCONNECT.0 + PAUSE_AFTER_S;
     assert!((pause_at..pause_at + 5.0).contains(&paused[0]), "paused at {:.1} s", paused[0]);
 
-    // Data faults: a retry within the recording that met the window (ends under 3 s later), and the point it hit
-    // committed as re-measured or flagged, never as valid.
+    // Data faults: the point whose recording met the window is retried, at once when the acquisition sees the
+    // fault (an overrun, an underrun) or when the point is processed, after the next point's acquisition (a
+    // dropout, caught by the SNR gate); it is committed as re-measured or flagged, never as valid.
+    let playing_at = |t_s: f64| -> usize {
+        events
+            .iter()
+            .filter(|(t, e)| *t <= t_s && matches!(e, Event::Phase { phase: Phase::Playing, .. }))
+            .filter_map(|(_, e)| match e {
+                Event::Phase { unit, .. } => Some(*unit),
+                _ => None,
+            })
+            .next_back()
+            .unwrap()
+    };
     let status_of = |point: usize| {
         events.iter().find_map(|(_, e)| match e {
             Event::Committed { unit, status, .. } if *unit == point => Some(status.clone()),
@@ -103,11 +116,10 @@ fn a_scan_through_every_fault_kind_completes_and_remeasures_or_flags_what_they_h
         })
     };
     for (kind, start, duration) in DATA_FAULTS {
-        let hit = events.iter().find_map(|(t, e)| match e {
-            Event::Retry { unit, .. } if (start..start + duration + 3.0).contains(t) => Some(*unit),
-            _ => None,
-        });
-        let point = hit.unwrap_or_else(|| panic!("{kind:?} at {start} s: no retry"));
+        let point = playing_at(start + duration / 2.0);
+        let retried =
+            events.iter().any(|(t, e)| matches!(e, Event::Retry { unit, .. } if *unit == point && *t >= start));
+        assert!(retried, "{kind:?} at {start} s met point {point}'s recording: no retry of it");
         let status = status_of(point).unwrap();
         assert_ne!(status, "valid", "{kind:?} hit point {point}, committed {status}");
     }

@@ -135,7 +135,12 @@ fn a_resume_on_other_wiring_is_refused_naming_it() {
     let (scene, plan, dir, _) = scan_stopped_after_one_point();
     // The dataset records the rig it was measured on.
     let rig_recorded = Dataset::open(dir.path()).unwrap().manifest().meta.config["rig"].clone();
-    assert_eq!(rig_recorded["vibrometer"]["serial"], "LAB-LDV-0001", "{rig_recorded}");
+    // The mock lab's Polytec controller, as the driver identifies it (its RS-232 interface reports no serial).
+    assert_eq!(rig_recorded["vibrometer"]["vendor"], "Polytec", "{rig_recorded}");
+    assert_eq!(
+        rig_recorded["vibrometer"]["model"], "OFV-5000 Vibrometer Controller; sensor head OFV-505; VeloDec,0 VD-02",
+        "{rig_recorded}"
+    );
     assert_eq!(rig_recorded["wiring"]["loopback_channel"], 8, "{rig_recorded}");
 
     // The same lab with actuators 0 and 1 cabled the other way round.
@@ -196,4 +201,23 @@ fn a_resumed_run_continues_at_the_velocity_range_the_interrupted_one_had_widened
     let clipped_again = events.0.iter().any(|e| matches!(e, Event::Retry { reason, .. } if reason == "clipped"));
     assert!(!clipped_again, "the resumed run starts at the widened range, so it does not clip again");
     assert_same_rows(&image(reference_dir.path()), &image(dir.path()), "resumed at the widened range vs uninterrupted");
+}
+
+#[test]
+fn a_rig_that_cannot_reach_a_point_stops_before_the_run_starts() {
+    // An aimer that refuses every point (a hardware rig without an aiming backend): the run stops at the reach
+    // check, naming why, before a dataset is created.
+    let scene = metamaterial();
+    let plan = small_plan(3);
+    let dir = tempfile::tempdir().unwrap();
+    let (lab, _) = common::lab_and_plan(&scene, 7, 5);
+    let mut rig = lab.rig().unwrap();
+    rig.aim = Box::new(metaplate_core::aim::NoAimer { detail: "no aiming backend in this test".into() });
+    let out = output(&dir.path().join("run"), &scene, false);
+    let err = scan(&mut rig, &plan, None, &quick_config(), &out, &RunControl::new(), &mut Silent).unwrap_err();
+    assert!(
+        matches!(&err, RecipeError::Aim(metaplate_core::aim::AimError::Unavailable { detail }) if detail.contains("no aiming")),
+        "{err}"
+    );
+    assert!(!dir.path().join("run").exists(), "nothing written before the reach check");
 }

@@ -11,6 +11,7 @@ mod calibrate;
 mod check;
 mod deconvolve;
 mod demo;
+mod design;
 mod devices;
 mod experiment;
 mod experiment_run;
@@ -100,6 +101,11 @@ enum Command {
     /// The Green's-function error budget of a scene on the mock lab: the processing floor (every imperfection
     /// off), each imperfection alone, all on, per octave band, and whether the terms add up (JSON with --json).
     Budget(budget::BudgetArgs),
+    /// Metamaterial design: a unit cell's band structure (`design band DESIGN`).
+    Design {
+        #[command(subcommand)]
+        command: design::DesignCommand,
+    },
     /// The simulated plate's ground truth: dispersion, Green's functions.
     Simulate {
         #[command(subcommand)]
@@ -146,6 +152,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Tradeoff(args) => tradeoff::run(&args),
         Command::Budget(args) => budget::run(&args),
         Command::Simulate { command } => simulate::run(&command),
+        Command::Design { command } => design::run(&command),
         Command::Calibrate(args) => calibrate::run(&args),
         Command::Scan(args) => scan::run(&args),
     }

@@ -42,9 +42,9 @@ impl Capability {
 /// Something connected that a backend could open, with what the hardware file writes to name it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Found {
-    /// The key to set (`ldv.port`, `daq.usb`).
+    /// The key to set (`ldv.port`, `daq.serial`).
     pub key: &'static str,
-    /// Its value (`/dev/ttyUSB0`, `1209:0001:SN0001`).
+    /// Its value (`/dev/ttyUSB0`, `360012345`).
     pub value: String,
     /// What the system says it is (manufacturer, product), empty when it says nothing.
     pub description: String,
@@ -105,22 +105,32 @@ impl Backend {
 }
 
 /// Every backend of every capability.
-pub const BACKENDS: [Backend; 5] = [
+pub const BACKENDS: [Backend; 6] = [
     Backend {
         capability: Capability::Vibrometer,
-        name: "serial",
-        needs: "the controller's serial port (`port`), read and write access to it",
+        name: "polytec",
+        needs: "a Polytec controller's RS-232 port (`port`), read and write access to it; optionally the decoder \
+                (`decoder = \"VD-09\"` or an index)",
         feature: "serial",
         available: cfg!(feature = "serial"),
         linux_only: false,
         list: list_serial,
     },
     Backend {
+        capability: Capability::Vibrometer,
+        name: "analog",
+        needs: "the range set at the instrument (`range = \"25mm/s/V\"`), its `vendor` and `model`; nothing is sent",
+        feature: "(none: always built)",
+        available: true,
+        linux_only: false,
+        list: list_nothing,
+    },
+    Backend {
         capability: Capability::Daq,
-        name: "usb-bulk",
-        needs: "a DAQ speaking metaplate's USB bulk protocol (`usb = \"VID:PID:SERIAL\"`), access to its USB device",
-        feature: "usb-bulk",
-        available: cfg!(feature = "usb-bulk"),
+        name: "labjack-u6",
+        needs: "a LabJack U6 on USB (`serial = \"360012345\"`, as on its label), access to its USB device",
+        feature: "labjack-u6",
+        available: cfg!(feature = "labjack-u6"),
         linux_only: false,
         list: list_usb,
     },
@@ -168,8 +178,8 @@ pub(crate) fn names(capability: Capability) -> Vec<&'static str> {
     of(capability).map(|b| b.name).collect()
 }
 
-/// For a backend this build lacks (never called: [`Backend::list`] checks `available` first).
-#[allow(dead_code)] // Used only in builds without some backend.
+/// For a backend that has nothing to list (`analog`), or that this build lacks (never called then:
+/// [`Backend::list`] checks `available` first).
 fn list_nothing() -> Result<Vec<Found>, ListError> {
     Ok(Vec::new())
 }
@@ -227,7 +237,8 @@ fn list_hidraw() -> Result<Vec<Found>, ListError> {
 
 #[cfg(feature = "serial")]
 fn list_serial() -> Result<Vec<Found>, ListError> {
-    let ports = metaplate_ldv::available_ports().map_err(|e| ListError { backend: "serial", detail: e.to_string() })?;
+    let ports =
+        metaplate_ldv::available_ports().map_err(|e| ListError { backend: "polytec", detail: e.to_string() })?;
     Ok(ports
         .into_iter()
         .map(|port| {
@@ -235,7 +246,14 @@ fn list_serial() -> Result<Vec<Found>, ListError> {
                 Some(serial) => format!("USB {vid:04x}:{pid:04x} serial {serial}"),
                 None => format!("USB {vid:04x}:{pid:04x}"),
             });
-            let description = [usb.unwrap_or_default(), port.description].join(" ").trim().to_string();
+            // A Polytec controller names itself when asked (`GetDevInfo,Controller,0,Name`); a port that cannot be
+            // opened (busy, no permission) or does not answer is listed without it.
+            let polytec = metaplate_ldv::SerialPortLine::open(metaplate_ldv::PortSelector::Path(port.path.clone()))
+                .ok()
+                .and_then(|line| metaplate_ldv::probe_polytec(line, 0.3).ok())
+                .map(|name| format!("Polytec {name}"));
+            let description =
+                [polytec.unwrap_or_default(), usb.unwrap_or_default(), port.description].join(" ").trim().to_string();
             Found { key: "ldv.port", value: port.path.display().to_string(), description }
         })
         .collect())
@@ -246,21 +264,27 @@ fn list_serial() -> Result<Vec<Found>, ListError> {
     Ok(Vec::new())
 }
 
-/// Every USB device with a serial number (a bulk DAQ is named by one); which are DAQs is not known from the bus.
-#[cfg(feature = "usb-bulk")]
+/// The LabJack U6s on USB (vendor `0x0CD5`, product `0x0006`), by the serial number of their USB descriptor.
+#[cfg(feature = "labjack-u6")]
 fn list_usb() -> Result<Vec<Found>, ListError> {
-    let devices = metaplate_daq::usb_devices().map_err(|e| ListError { backend: "usb-bulk", detail: e.to_string() })?;
+    use metaplate_u6_protocol::{PRODUCT_ID, VENDOR_ID};
+    let devices =
+        metaplate_daq::usb_devices().map_err(|e| ListError { backend: "labjack-u6", detail: e.to_string() })?;
     Ok(devices
         .into_iter()
-        .filter_map(|d| {
-            let serial = d.serial?;
-            let value = format!("{:04x}:{:04x}:{serial}", d.vendor_id, d.product_id);
-            Some(Found { key: "daq.usb", value, description: d.description })
+        .filter(|d| (d.vendor_id, d.product_id) == (VENDOR_ID, PRODUCT_ID))
+        .map(|d| match d.serial {
+            Some(serial) => Found { key: "daq.serial", value: serial, description: d.description },
+            None => Found {
+                key: "daq.serial",
+                value: "?".into(),
+                description: "a LabJack U6 whose USB descriptor has no serial number: read it from its label".into(),
+            },
         })
         .collect())
 }
 
-#[cfg(not(feature = "usb-bulk"))]
+#[cfg(not(feature = "labjack-u6"))]
 fn list_usb() -> Result<Vec<Found>, ListError> {
     Ok(Vec::new())
 }

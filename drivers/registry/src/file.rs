@@ -3,8 +3,10 @@
 use std::path::{Path, PathBuf};
 
 use metaplate_core::rig::Wiring;
-use metaplate_daq::UsbSelector;
-use metaplate_ldv::{BAUD_RATE, PortSelector};
+use metaplate_core::vibrometer::VibrometerIdentity;
+use metaplate_daq::{DriverSettings, UsbSelector};
+use metaplate_ldv::{AnalogVibrometer, BAUD_RATE, DecoderChoice, FocusSpan, MAX_DECODERS, PolytecConfig, PortSelector};
+use metaplate_u6_protocol::config::MAX_STREAM_RESOLUTION_INDEX;
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
@@ -61,87 +63,134 @@ pub enum HardwareError {
     },
 }
 
-/// `[ldv]`: the scanning vibrometer's controller.
+/// `[ldv]`: the vibrometer.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LdvSection {
-    /// `backend = "serial"`: on an RS-232 port.
-    Serial(SerialLdv),
+    /// `backend = "polytec"`: a Polytec controller (OFV-5000, VibroFlex) on an RS-232 port.
+    Polytec(PolytecLdv),
+    /// `backend = "analog"`: a vibrometer without a remote interface; its range is declared here.
+    Analog(AnalogLdv),
 }
 
-/// `[ldv]` with `backend = "serial"`.
+/// `[ldv]` with `backend = "polytec"`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SerialLdv {
+pub struct PolytecLdv {
     /// Serial port path (`/dev/serial/by-id/...`, `COM3`).
     pub port: PathBuf,
-    /// Baud rate; must be the controller's ([`BAUD_RATE`]); optional.
+    /// Baud rate; must be the one the driver opens at ([`BAUD_RATE`]); optional.
     #[serde(default = "default_baud")]
     pub baud: u32,
+    /// The velocity decoder: its name (`"VD-09"`) or index (`1` for `VeloDec,1`); without it the driver takes the
+    /// first velocity decoder the unit reports.
+    pub decoder: Option<toml::Value>,
+    /// The decoder's low-pass filter as the unit spells it (`"20kHz"`), if any.
+    pub low_pass: Option<String>,
+    /// Autofocus at open and after a reconnect: `"Full"`, `"Medium"` or `"Small"`; optional.
+    pub autofocus: Option<String>,
 }
 
 fn default_baud() -> u32 {
     BAUD_RATE
 }
 
-impl SerialLdv {
+impl PolytecLdv {
     /// The port selector of this section.
     pub fn selector(&self) -> PortSelector {
         PortSelector::Path(self.port.clone())
+    }
+
+    /// The driver's configuration of this section.
+    ///
+    /// # Errors
+    /// A sentence naming the key (`decoder`, `autofocus`) and what is wrong with it.
+    pub fn config(&self) -> Result<PolytecConfig, String> {
+        let decoder = match &self.decoder {
+            None => DecoderChoice::First,
+            Some(toml::Value::String(name)) if !name.trim().is_empty() => DecoderChoice::Name(name.trim().to_owned()),
+            Some(toml::Value::Integer(i)) => u8::try_from(*i)
+                .ok()
+                .filter(|i| *i < MAX_DECODERS)
+                .map(DecoderChoice::Index)
+                .ok_or_else(|| format!("decoder = {i}: an index is 0 to {}", MAX_DECODERS - 1))?,
+            Some(other) => return Err(format!("decoder = {other}: a name (\"VD-09\") or an index (1)")),
+        };
+        let autofocus = match self.autofocus.as_deref() {
+            None => None,
+            Some("Full") => Some(FocusSpan::Full),
+            Some("Medium") => Some(FocusSpan::Medium),
+            Some("Small") => Some(FocusSpan::Small),
+            Some(other) => return Err(format!("autofocus = {other:?}: \"Full\", \"Medium\" or \"Small\"")),
+        };
+        Ok(PolytecConfig { decoder, low_pass: self.low_pass.clone(), autofocus })
+    }
+}
+
+/// `[ldv]` with `backend = "analog"`: what the dataset records of a vibrometer that cannot be asked.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalogLdv {
+    /// The velocity range set at the instrument, as written on it (`"25mm/s/V"`).
+    pub range: String,
+    /// Its output's swing at full scale, +/- V; optional, 10 V.
+    pub output_full_scale_v: Option<f64>,
+    /// Manufacturer, for the dataset.
+    pub vendor: String,
+    /// Model, for the dataset.
+    pub model: String,
+    /// Serial number, for the dataset; optional.
+    pub serial: Option<String>,
+}
+
+impl AnalogLdv {
+    /// The identity the dataset records.
+    pub fn identity(&self) -> VibrometerIdentity {
+        VibrometerIdentity {
+            vendor: self.vendor.clone(),
+            model: self.model.clone(),
+            serial: self.serial.clone().unwrap_or_else(|| "not given".into()),
+            firmware: "analog output only".into(),
+        }
     }
 }
 
 /// `[daq]`: the DAQ.
 #[derive(Debug, Clone, PartialEq)]
 pub enum DaqSection {
-    /// `backend = "usb-bulk"`: metaplate's USB bulk protocol.
-    UsbBulk(UsbBulkDaq),
+    /// `backend = "labjack-u6"`: a LabJack U6 over USB.
+    LabjackU6(LabjackU6Daq),
     /// `backend = "nidaqmx"`: an NI DAQ through NI-DAQmx.
     Nidaqmx(NidaqmxDaq),
 }
 
-/// `[daq]` with `backend = "usb-bulk"`.
+/// `[daq]` with `backend = "labjack-u6"`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct UsbBulkDaq {
-    /// `VID:PID:SERIAL`, ids in hex as `lsusb` prints them.
-    pub usb: String,
-    /// Interface with the bulk endpoints (default 0).
+pub struct LabjackU6Daq {
+    /// The U6's serial number, decimal (`"360012345"`: on its label; `metaplate devices` lists it): required, a
+    /// lab may have two.
+    pub serial: String,
+    /// StreamConfig's ResolutionIndex, 0-8 (default 0, the U6's usual stream setting).
     #[serde(default)]
-    pub interface: u8,
-    /// Bulk OUT endpoint address (default `0x01`).
-    #[serde(default = "default_endpoint_out")]
-    pub endpoint_out: u8,
-    /// Bulk IN endpoint address (default `0x81`).
-    #[serde(default = "default_endpoint_in")]
-    pub endpoint_in: u8,
+    pub resolution_index: u8,
+    /// StreamConfig's SettlingFactor in 10 us steps (default 0: the U6 chooses).
+    #[serde(default)]
+    pub settling_factor: u8,
 }
 
-fn default_endpoint_out() -> u8 {
-    0x01
-}
+impl LabjackU6Daq {
+    /// The USB selector of this section: the U6 with this serial number.
+    pub fn selector(&self) -> UsbSelector {
+        UsbSelector::u6(Some(self.serial.clone()))
+    }
 
-fn default_endpoint_in() -> u8 {
-    0x81
-}
-
-impl UsbBulkDaq {
-    /// The USB selector of this section.
-    ///
-    /// # Errors
-    /// A sentence saying what is malformed in `usb` (the serial number is required: a lab may have two DAQs).
-    pub fn selector(&self) -> Result<UsbSelector, String> {
-        let ids = UsbIds::parse(&self.usb)?;
-        if ids.serial.is_none() {
-            return Err(format!("`{}` has no serial number: write VID:PID:SERIAL", self.usb));
+    /// The driver settings of this section (the defaults, with its resolution index and settling).
+    pub fn settings(&self) -> DriverSettings {
+        DriverSettings {
+            resolution_index: self.resolution_index,
+            settling_factor: self.settling_factor,
+            ..DriverSettings::default()
         }
-        Ok(UsbSelector {
-            vendor_id: ids.vendor_id,
-            product_id: ids.product_id,
-            serial: ids.serial,
-            interface: self.interface,
-            endpoint_out: self.endpoint_out,
-            endpoint_in: self.endpoint_in,
-        })
     }
 }
 
@@ -318,11 +367,12 @@ impl HardwareFile {
         let bad = |key: &str, reason: String| HardwareError::File { path: path.to_path_buf(), key: key.into(), reason };
         let raw: RawFile = toml::from_str(text).map_err(|e| bad("(file)", e.to_string().trim_end().to_string()))?;
         let ldv = match section(path, Capability::Vibrometer, raw.ldv)? {
-            ("serial", rest) => LdvSection::Serial(keys(path, "ldv", rest)?),
+            ("polytec", rest) => LdvSection::Polytec(keys(path, "ldv", rest)?),
+            ("analog", rest) => LdvSection::Analog(keys(path, "ldv", rest)?),
             (other, _) => return Err(unknown_backend(path, Capability::Vibrometer, other)),
         };
         let daq = match section(path, Capability::Daq, raw.daq)? {
-            ("usb-bulk", rest) => DaqSection::UsbBulk(keys(path, "daq", rest)?),
+            ("labjack-u6", rest) => DaqSection::LabjackU6(keys(path, "daq", rest)?),
             ("nidaqmx", rest) => DaqSection::Nidaqmx(keys(path, "daq", rest)?),
             (other, _) => return Err(unknown_backend(path, Capability::Daq, other)),
         };
@@ -336,13 +386,29 @@ impl HardwareFile {
             Some((other, _)) => return Err(unknown_backend(path, Capability::Keypad, other)),
         };
         let file = Self { path: path.to_path_buf(), plate: raw.plate, ldv, daq, audio, keypad, wiring: raw.wiring };
-        let LdvSection::Serial(serial) = &file.ldv;
-        if serial.baud != BAUD_RATE {
-            return Err(bad("ldv.baud", format!("{}: the controller speaks {BAUD_RATE} baud 8N1 only", serial.baud)));
+        match &file.ldv {
+            LdvSection::Polytec(polytec) => {
+                if polytec.baud != BAUD_RATE {
+                    let detail = format!("{}: the driver opens the controller at {BAUD_RATE} baud 8N1", polytec.baud);
+                    return Err(bad("ldv.baud", detail));
+                }
+                polytec.config().map_err(|reason| bad("ldv", reason))?;
+            }
+            LdvSection::Analog(analog) => {
+                AnalogVibrometer::new(analog.identity(), &analog.range, analog.output_full_scale_v)
+                    .map_err(|e| bad("ldv.range", e.to_string()))?;
+            }
         }
         match &file.daq {
-            DaqSection::UsbBulk(usb) => {
-                usb.selector().map_err(|reason| bad("daq.usb", reason))?;
+            DaqSection::LabjackU6(u6) => {
+                if u6.serial.parse::<u32>().is_err() {
+                    let detail = format!("{:?} is not a U6 serial number (decimal digits, as on its label)", u6.serial);
+                    return Err(bad("daq.serial", detail));
+                }
+                if u6.resolution_index > MAX_STREAM_RESOLUTION_INDEX {
+                    let detail = format!("{}: the U6 streams at resolution index 0-8", u6.resolution_index);
+                    return Err(bad("daq.resolution_index", detail));
+                }
             }
             DaqSection::Nidaqmx(ni) => {
                 if ni.device.is_empty() || ni.device.contains('\0') {
@@ -382,13 +448,14 @@ impl HardwareFile {
             (
                 Capability::Vibrometer,
                 match self.ldv {
-                    LdvSection::Serial(_) => "serial",
+                    LdvSection::Polytec(_) => "polytec",
+                    LdvSection::Analog(_) => "analog",
                 },
             ),
             (
                 Capability::Daq,
                 match self.daq {
-                    DaqSection::UsbBulk(_) => "usb-bulk",
+                    DaqSection::LabjackU6(_) => "labjack-u6",
                     DaqSection::Nidaqmx(_) => "nidaqmx",
                 },
             ),

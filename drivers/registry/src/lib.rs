@@ -3,8 +3,9 @@
 //! the hardware file that names one backend per instrument ([`HardwareFile`]), and opening the rig it names
 //! ([`open_rig`]).
 //!
-//! - [`backends`]: [`Capability`] (`Vibrometer`, `Daq`, `Audio`, `Keypad`) and [`BACKENDS`]: `serial` (the LDV's
-//!   controller, serialport), `usb-bulk` (a DAQ speaking metaplate's USB bulk protocol, nusb), `nidaqmx` (an NI DAQ
+//! - [`backends`]: [`Capability`] (`Vibrometer`, `Daq`, `Audio`, `Keypad`) and [`BACKENDS`]: `polytec` (a Polytec
+//!   vibrometer controller over RS-232, serialport), `analog` (a vibrometer without a remote interface, its range
+//!   declared), `labjack-u6` (a LabJack U6 over its documented USB functions, nusb), `nidaqmx` (an NI DAQ
 //!   through NI-DAQmx, loaded at run time), `alsa` (the audio interface) and `hidraw` (the response keypad), each
 //!   with what it needs, its feature, whether this build has it, and [`Backend::list`], the devices it can see.
 //! - [`HardwareFile`]: the hardware file (format below), parsed and checked. Errors ([`HardwareError`]) name the
@@ -21,7 +22,7 @@
 //! implements the device side of the same protocol behind the same transport trait, so tests run the code the lab
 //! runs. Real backends are cargo features of the driver crates (`metaplate-ldv/serial`: serialport;
 //! `metaplate-daq/usb`: nusb; `metaplate-daq/nidaqmx`: libloading; `metaplate-audio/alsa` and
-//! `metaplate-keypad/hidraw`: Linux only), and this crate's features turn them on (`serial`, `usb-bulk`,
+//! `metaplate-keypad/hidraw`: Linux only), and this crate's features turn them on (`serial`, `labjack-u6`,
 //! `nidaqmx`, `alsa`, `hidraw`; all of them: `hardware`, the default here and in the binary). The workspace depends
 //! on the drivers without them, so the mock devices, the mock lab, the recipes and a `cargo build -p metaplate-cli
 //! --no-default-features` binary link none (`.ci/run` checks it with `cargo tree`). A build without a backend
@@ -37,17 +38,17 @@
 //! # actuator positions describe the real plate; its simulation settings are ignored.
 //! plate = "metamaterial"
 //!
-//! [ldv]                      # the scanning vibrometer's controller
-//! backend = "serial"         # RS-232 (the only LDV backend)
+//! [ldv]                      # the vibrometer
+//! backend = "polytec"        # a Polytec controller on RS-232 (or "analog": range declared, nothing sent)
 //! port = "/dev/serial/by-id/usb-FTDI_FT232R_USB_UART_A10K1234-if00-port0"
+//! decoder = "VD-09"          # optional: the velocity decoder by name or index; else the first the unit has
 //! baud = 115200              # optional; the controller speaks 115200 8N1 only, anything else is refused
 //!
-//! [daq]                      # the DAQ: either metaplate's USB bulk protocol ...
-//! backend = "usb-bulk"
-//! usb = "1209:0001:SN0001"   # VID:PID:SERIAL, ids in hex as lsusb prints them
-//! interface = 0              # optional (default 0): interface carrying the bulk endpoints
-//! endpoint_out = 0x01        # optional (default 0x01)
-//! endpoint_in = 0x81         # optional (default 0x81)
+//! [daq]                      # the DAQ: either a LabJack U6 on USB ...
+//! backend = "labjack-u6"
+//! serial = "360012345"       # its serial number, as on its label (`metaplate devices` lists the U6s it sees)
+//! resolution_index = 0       # optional (default 0): StreamConfig's ResolutionIndex, 0-8
+//! settling_factor = 0        # optional (default 0: the U6 chooses): extra settling, 10 us steps
 //! # ... or an NI DAQ through NI-DAQmx:
 //! # backend = "nidaqmx"
 //! # device = "Dev1"          # the NI device name (NI MAX)
@@ -81,8 +82,8 @@ mod open;
 
 pub use backends::{BACKENDS, Backend, Capability, Found, ListError};
 pub use file::{
-    AlsaAudio, AudioSection, DaqSection, HardwareError, HardwareFile, HidrawKeypad, KeypadSection, LdvSection,
-    NidaqmxDaq, SerialLdv, UsbBulkDaq, UsbIds, WiringSection,
+    AlsaAudio, AnalogLdv, AudioSection, DaqSection, HardwareError, HardwareFile, HidrawKeypad, KeypadSection,
+    LabjackU6Daq, LdvSection, NidaqmxDaq, PolytecLdv, UsbIds, WiringSection,
 };
 pub use listing::{Listing, draft_hardware_file, list_connected, listings_json, listings_text};
 pub use open::{OpenedRig, open_plate_rig, open_rig};

@@ -135,17 +135,17 @@ pub fn draft_hardware_file(listings: &[Listing], path: &Path) -> Result<String, 
          # CHOOSE need your decision; the format is documented in `cli/hardware.example.toml` and the\n\
          # metaplate-drivers crate.\n\n\
          plate = \"metamaterial\"   # CHOOSE: the scene describing your plate (built-in name or scene file)\n\n\
-         [ldv]\nbackend = \"serial\"\n",
+         [ldv]\nbackend = \"polytec\"\n",
     );
     text.push_str(&choose(listings, "ldv.port", "/dev/ttyUSB0", "serial port"));
     text.push_str("baud = 115200\n\n[daq]\n");
     let nidaqmx = listings.iter().any(|l| l.found.iter().any(|f| f.key == "daq.device"));
     if nidaqmx {
-        text.push_str("backend = \"nidaqmx\"   # CHOOSE: or \"usb-bulk\" with usb = \"VID:PID:SERIAL\"\n");
+        text.push_str("backend = \"nidaqmx\"   # CHOOSE: or \"labjack-u6\" with serial = \"360012345\"\n");
         text.push_str(&choose(listings, "daq.device", "Dev1", "NI-DAQmx device"));
     } else {
-        text.push_str("backend = \"usb-bulk\"   # CHOOSE: or \"nidaqmx\" with device = \"Dev1\"\n");
-        text.push_str(&choose(listings, "daq.usb", "1209:0001:SN0001", "USB device with a serial number"));
+        text.push_str("backend = \"labjack-u6\"   # CHOOSE: or \"nidaqmx\" with device = \"Dev1\"\n");
+        text.push_str(&choose(listings, "daq.serial", "360012345", "LabJack U6"));
     }
     text.push_str("\n[audio]\nbackend = \"alsa\"\n");
     text.push_str(&choose(listings, "audio.device", "hw:CARD=24Ao,DEV=0", "ALSA playback PCM"));

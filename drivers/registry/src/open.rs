@@ -3,6 +3,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use metaplate_core::aim::NoAimer;
 use metaplate_core::clock::{Clock, RealClock};
 use metaplate_core::rig::Rig;
 use metaplate_core::scene::Scene;
@@ -70,11 +71,18 @@ pub fn open_rig(file: &HardwareFile) -> Result<OpenedRig, HardwareError> {
         }
     }
     let clock: Arc<dyn Clock> = Arc::new(RealClock::new());
-    let vibrometer = open_ldv(&file.ldv, &clock)?;
+    let vibrometer = open_ldv(&file.ldv)?;
     let daq = open_daq(&file.daq)?;
     let audio = open_audio(&file.audio)?;
     let keypad = file.keypad.as_ref().map(|keypad| open_keypad(keypad, &clock)).transpose()?;
-    Ok(OpenedRig { rig: Rig { vibrometer, daq, audio, clock, wiring: file.wiring() }, keypad })
+    // No aiming backend exists yet (galvo mirrors and Zaber stages are to come): every point is refused, naming
+    // why, so a scan or a pre-flight stops before it moves anything.
+    let aim = Box::new(NoAimer {
+        detail: "this build has no aiming backend yet (galvo mirrors and Zaber stages are to come): a hardware rig \
+                 can identify its instruments but cannot put the beam on a point"
+            .into(),
+    });
+    Ok(OpenedRig { rig: Rig { vibrometer, aim, daq, audio, clock, wiring: file.wiring() }, keypad })
 }
 
 /// The error of an instrument that could not be opened.
@@ -89,44 +97,50 @@ fn not_built(capability: Capability, backend: &'static str, name: &str) -> Hardw
     device(capability, backend, name, "this build of metaplate lacks the backend")
 }
 
-fn open_ldv(
-    section: &LdvSection,
-    clock: &Arc<dyn Clock>,
-) -> Result<Box<dyn metaplate_core::vibrometer::Vibrometer + Send>, HardwareError> {
+fn open_ldv(section: &LdvSection) -> Result<Box<dyn metaplate_core::vibrometer::Vibrometer + Send>, HardwareError> {
     match section {
-        LdvSection::Serial(serial) => {
-            let name = serial.port.display().to_string();
+        LdvSection::Polytec(polytec) => {
+            let name = polytec.port.display().to_string();
             #[cfg(feature = "serial")]
             {
-                use metaplate_ldv::{LdvDriver, RetryPolicy, SerialPortLine};
-                let error = |e: &dyn std::fmt::Display| device(Capability::Vibrometer, "serial", &name, e);
-                let line = SerialPortLine::open(serial.selector()).map_err(|e| error(&e))?;
-                let driver = LdvDriver::new(line, Arc::clone(clock), RetryPolicy::default()).map_err(|e| error(&e))?;
+                use metaplate_ldv::{PolytecDriver, RetryPolicy, SerialPortLine};
+                let error = |e: &dyn std::fmt::Display| device(Capability::Vibrometer, "polytec", &name, e);
+                let config = polytec.config().map_err(|e| error(&e))?;
+                let line = SerialPortLine::open(polytec.selector()).map_err(|e| error(&e))?;
+                let driver = PolytecDriver::new(line, RetryPolicy::default(), config).map_err(|e| error(&e))?;
                 Ok(Box::new(driver))
             }
             #[cfg(not(feature = "serial"))]
-            {
-                let _ = clock;
-                Err(not_built(Capability::Vibrometer, "serial", &name))
-            }
+            Err(not_built(Capability::Vibrometer, "polytec", &name))
+        }
+        LdvSection::Analog(analog) => {
+            let ldv =
+                metaplate_ldv::AnalogVibrometer::new(analog.identity(), &analog.range, analog.output_full_scale_v)
+                    .map_err(|e| device(Capability::Vibrometer, "analog", &analog.model, e))?;
+            Ok(Box::new(ldv))
         }
     }
 }
 
 fn open_daq(section: &DaqSection) -> Result<Box<dyn metaplate_core::daq::Daq + Send>, HardwareError> {
     match section {
-        DaqSection::UsbBulk(usb) => {
-            #[cfg(feature = "usb-bulk")]
+        DaqSection::LabjackU6(u6) => {
+            let serial = &u6.serial;
+            #[cfg(feature = "labjack-u6")]
             {
-                use metaplate_daq::{DaqDriver, DriverSettings, UsbTransport};
-                let error = |e: &dyn std::fmt::Display| device(Capability::Daq, "usb-bulk", &usb.usb, e);
-                let selector = usb.selector().map_err(|e| error(&e))?;
-                let transport = UsbTransport::open(selector).map_err(|e| error(&e))?;
-                let driver = DaqDriver::open(transport, DriverSettings::default()).map_err(|e| error(&e))?;
+                use metaplate_daq::{U6Driver, UsbTransport};
+                let error = |e: &dyn std::fmt::Display| device(Capability::Daq, "labjack-u6", serial, e);
+                let transport = UsbTransport::open(u6.selector()).map_err(|e| error(&e))?;
+                let driver = U6Driver::open(transport, u6.settings()).map_err(|e| error(&e))?;
+                // The transport matched the USB serial descriptor when the U6 has one; ConfigU6's is the truth.
+                if &metaplate_core::daq::Daq::identity(&driver).serial != serial {
+                    let found = &metaplate_core::daq::Daq::identity(&driver).serial;
+                    return Err(error(&format!("the U6 found reports serial number {found}")));
+                }
                 Ok(Box::new(driver))
             }
-            #[cfg(not(feature = "usb-bulk"))]
-            Err(not_built(Capability::Daq, "usb-bulk", &usb.usb))
+            #[cfg(not(feature = "labjack-u6"))]
+            Err(not_built(Capability::Daq, "labjack-u6", serial))
         }
         DaqSection::Nidaqmx(ni) => {
             #[cfg(feature = "nidaqmx")]

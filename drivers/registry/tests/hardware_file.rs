@@ -25,11 +25,22 @@ fn with_daq(daq: &str) -> String {
 fn the_example_names_a_backend_per_instrument() {
     let file = parse(EXAMPLE).unwrap();
     let named: Vec<_> = file.backends();
-    assert_eq!(named, [(Capability::Vibrometer, "serial"), (Capability::Daq, "usb-bulk"), (Capability::Audio, "alsa")]);
-    let DaqSection::UsbBulk(usb) = &file.daq else { panic!("{:?}", file.daq) };
-    let selector = usb.selector().unwrap();
-    assert_eq!((selector.vendor_id, selector.product_id, selector.serial.as_deref()), (0x1209, 0x0001, Some("SN0001")));
-    assert_eq!((selector.interface, selector.endpoint_out, selector.endpoint_in), (0, 0x01, 0x81));
+    assert_eq!(
+        named,
+        [(Capability::Vibrometer, "polytec"), (Capability::Daq, "labjack-u6"), (Capability::Audio, "alsa")]
+    );
+    let DaqSection::LabjackU6(u6) = &file.daq else { panic!("{:?}", file.daq) };
+    let selector = u6.selector();
+    // LabJack's vendor id and the U6's product id; its endpoints as the Exodriver's labjackusb.h names them.
+    assert_eq!(
+        (selector.vendor_id, selector.product_id, selector.serial.as_deref()),
+        (0x0cd5, 0x0006, Some("360012345"))
+    );
+    assert_eq!(
+        (selector.interface, selector.endpoint_out, selector.endpoint_in, selector.endpoint_stream),
+        (0, 0x01, 0x82, 0x83)
+    );
+    assert_eq!((u6.settings().resolution_index, u6.settings().settling_factor), (0, 0));
     assert!(file.keypad.is_none());
 }
 
@@ -43,20 +54,58 @@ fn nidaqmx_and_the_keypad_are_selectable() {
     let Some(KeypadSection::Hidraw(keypad)) = &file.keypad else { panic!("{:?}", file.keypad) };
     assert_eq!((keypad.usb.as_str(), keypad.report_id), ("046d:c31c", Some(1)));
     let named: Vec<_> = file.backends().into_iter().map(|(_, name)| name).collect();
-    assert_eq!(named, ["serial", "nidaqmx", "alsa", "hidraw"]);
+    assert_eq!(named, ["polytec", "nidaqmx", "alsa", "hidraw"]);
+}
+
+/// The example with an analog vibrometer of range line `range` in place of the Polytec.
+fn analog(range: &str) -> String {
+    let start = EXAMPLE.find("[ldv]").unwrap();
+    let end = EXAMPLE.find("# A vibrometer without a remote interface").unwrap();
+    let section = format!("[ldv]\nbackend = \"analog\"\n{range}\nvendor = \"Polytec\"\nmodel = \"OFV-505\"\n");
+    format!("{}{section}{}", &EXAMPLE[..start], &EXAMPLE[end..])
+}
+
+#[test]
+fn polytec_decoder_choices_and_an_analog_vibrometer_are_read() {
+    use metaplate_drivers::LdvSection;
+    use metaplate_ldv::DecoderChoice;
+    for (line, want) in [
+        ("", DecoderChoice::First),
+        ("decoder = \"VD-09\"", DecoderChoice::Name("VD-09".into())),
+        ("decoder = 1", DecoderChoice::Index(1)),
+    ] {
+        let file = parse(&EXAMPLE.replace("baud = 115200", &format!("baud = 115200\n{line}"))).unwrap();
+        let LdvSection::Polytec(polytec) = &file.ldv else { panic!("{:?}", file.ldv) };
+        assert_eq!(polytec.config().unwrap().decoder, want, "{line}");
+    }
+    let file = parse(&analog("range = \"25mm/s/V\"")).unwrap();
+    let LdvSection::Analog(ldv) = &file.ldv else { panic!("{:?}", file.ldv) };
+    assert_eq!((ldv.range.as_str(), ldv.identity().model.as_str()), ("25mm/s/V", "OFV-505"));
+    assert_eq!(file.backends()[0].1, "analog");
 }
 
 /// Each bad file is refused with the file, the key in error and a reason containing `expected`.
 #[test]
 fn bad_files_name_the_key_and_the_reason() {
     let cases: Vec<(String, &str, &str)> = vec![
-        (EXAMPLE.replace("backend = \"usb-bulk\"", "backend = \"usb\""), "daq.backend", "one of usb-bulk, nidaqmx"),
-        (EXAMPLE.replace("backend = \"serial\"\n", ""), "ldv.backend", "missing"),
+        (
+            EXAMPLE.replace("backend = \"labjack-u6\"", "backend = \"usb-bulk\""),
+            "daq.backend",
+            "one of labjack-u6, nidaqmx",
+        ),
+        (EXAMPLE.replace("backend = \"polytec\"\n", ""), "ldv.backend", "missing"),
+        (EXAMPLE.replace("baud = 115200", "baud = 115200\ndecoder = 9"), "ldv", "an index is 0 to 7"),
+        (EXAMPLE.replace("baud = 115200", "baud = 115200\nautofocus = \"Wide\""), "ldv", "\"Full\""),
+        (analog("range = \"25 furlongs\""), "ldv.range", "not a velocity range"),
         (EXAMPLE.replace("backend = \"alsa\"", "backend = 3"), "audio.backend", "not a backend name"),
         (EXAMPLE.replace("baud = 115200", "baud = 9600"), "ldv.baud", "115200 baud"),
-        (EXAMPLE.replace("usb = \"1209:0001:SN0001\"", "usb = \"12g9:0001:SN0001\""), "daq.usb", "not a hex"),
-        (EXAMPLE.replace("usb = \"1209:0001:SN0001\"", "usb = \"1209:0001\""), "daq.usb", "no serial number"),
-        (EXAMPLE.replace("interface = 0", "interfce = 0"), "daq", "interfce"),
+        (EXAMPLE.replace("serial = \"360012345\"", "serial = \"SN0001\""), "daq.serial", "not a U6 serial number"),
+        (
+            EXAMPLE.replace("serial = \"360012345\"", "serial = \"360012345\"\nresolution_index = 9"),
+            "daq.resolution_index",
+            "0-8",
+        ),
+        (EXAMPLE.replace("serial = \"360012345\"", "serial = \"360012345\"\ninterface = 0"), "daq", "interface"),
         (with_daq("[daq]\nbackend = \"nidaqmx\"\ndevice = \"Dev1\"\nusb = \"1209:0001:SN1\"\n"), "daq", "usb"),
         (
             with_daq("[daq]\nbackend = \"nidaqmx\"\ndevice = \"Dev1\"\nread_timeout_s = -1.0\n"),
@@ -89,7 +138,7 @@ fn every_capability_has_a_table_and_every_backend_a_feature() {
         assert!(!backend.needs.is_empty() && !backend.feature.is_empty(), "{backend:?}");
         assert_eq!(backend.available, backend.missing_reason().is_none(), "{backend:?}");
         // Listing never fails for want of devices; backends that do not enumerate yet list nothing.
-        if !matches!(backend.name, "serial" | "usb-bulk") {
+        if !matches!(backend.name, "polytec" | "labjack-u6") {
             assert_eq!(backend.list(), Ok(Vec::new()), "{backend:?}");
         }
     }

@@ -31,7 +31,6 @@ fn main() {
     println!("lab built in {:.2} s ({} points)", t.elapsed().as_secs_f64(), points.len());
     let mut rig = lab.rig().expect("rig");
     configure(&mut rig, 2400).expect("configure");
-    rig.vibrometer.set_laser(true).expect("laser");
     rig.vibrometer.set_velocity_range(0.1).expect("range");
     let spec = SweepSpec {
         kind: SweepKind::Linear,
@@ -49,7 +48,7 @@ fn main() {
     let mut times = Vec::new();
     for &p in &points {
         let (x, y) = scene.grid.position_m(p);
-        rig.vibrometer.move_to(x, y).expect("move");
+        rig.aim.aim_at(x, y).expect("move");
         for actuator in 0..scene.actuators.len() {
             let t = Instant::now();
             let rec = play_and_record(&mut rig, actuator, &drive, &drive, record).expect("playback");

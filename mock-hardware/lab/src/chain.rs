@@ -14,7 +14,7 @@ use metaplate_core::scene::FaultKind;
 use metaplate_dsp::fft;
 use metaplate_dsp::resample::Interpolator;
 use metaplate_mock_audio::{FaultWindows, Playback, PlaybackObserver};
-use metaplate_mock_ldv::{MockDevice, SpeckleModel};
+use metaplate_mock_ldv::MockDevice;
 use metaplate_plate::GreensFunctions;
 use metaplate_plate::actuator::VoiceCoil;
 use num_complex::Complex64;
@@ -191,7 +191,6 @@ pub(crate) struct LabState {
     plate: Arc<Plate>,
     clock: Arc<VirtualClock>,
     ldv: Arc<Mutex<MockDevice>>,
-    speckle: SpeckleModel,
     windows: FaultWindows,
     playbacks: Vec<Scheduled>,
     drives: HashMap<u64, Arc<DriveEffect>>,
@@ -213,7 +212,6 @@ impl LabState {
         plate: Arc<Plate>,
         clock: Arc<VirtualClock>,
         ldv: Arc<Mutex<MockDevice>>,
-        speckle: SpeckleModel,
         windows: FaultWindows,
     ) -> Self {
         Self {
@@ -221,7 +219,6 @@ impl LabState {
             plate,
             clock,
             ldv,
-            speckle,
             windows,
             playbacks: Vec::new(),
             drives: HashMap::new(),
@@ -428,18 +425,17 @@ impl LabState {
 
     /// Turns plate velocity (m/s) into the LDV's output voltage: dropouts, noise, range, clipping.
     fn ldv_output(&mut self, run: DaqRun, first: u64, fd_hz: f64, out: &mut [f64]) -> Result<(), LabError> {
-        let (laser_on, range, position) = {
+        let (range, level) = {
             let ldv = self.ldv.lock().map_err(|_| LabError::Poisoned("the LDV mock"))?;
             let c = ldv.controller();
-            (c.laser() == metaplate_ldv_protocol::LaserState::On, c.velocity_range(), c.position())
+            (c.output_range(), c.beam_m().map(|_| c.speckle_level()))
         };
-        if !laser_on {
-            // No light, no Doppler signal: the velocity output rests at 0 V.
+        let (Some(range), Some(level)) = (range, level) else {
+            // No beam on the plate yet (or no decoder): no Doppler signal, the velocity output rests at 0 V.
             out.fill(0.0);
             return Ok(());
-        }
-        let level = f64::from(self.speckle.level_percent(position.x.um(), position.y.um())) / 100.0;
-        let full_scale = range.full_scale_m_per_s();
+        };
+        let full_scale = range.m_s_per_v() * metaplate_ldv::OUTPUT_FULL_SCALE_V;
         let noise = self.params.noise_rms_m_s / level.max(MIN_NOISE_LEVEL);
         let key = run.noise_key;
         for (i, v) in out.iter_mut().enumerate() {
@@ -462,7 +458,7 @@ impl LabState {
                 *v = full_scale * (2.0 * unit_open(mix64(key ^ 0xBAD ^ (first + i as u64))) - 1.0);
             }
         }
-        let volts_per_m_s = 1.0 / range.m_per_s_per_v();
+        let volts_per_m_s = 1.0 / range.m_s_per_v();
         let clip = if self.params.clipping { full_scale } else { f64::INFINITY };
         for v in out.iter_mut() {
             *v = v.clamp(-clip, clip) * volts_per_m_s;
@@ -606,7 +602,7 @@ impl Shared {
 
 impl PlaybackObserver for Shared {
     fn on_playback(&self, playback: &Playback) {
-        // The beam position (and laser) at playback start: the beam is assumed not to move while it plays.
+        // The beam position at playback start: the beam is assumed not to move while it plays.
         let beam = self.ldv_beam();
         if let Ok(mut state) = self.0.lock() {
             state.schedule(playback, beam);
@@ -618,8 +614,7 @@ impl Shared {
     fn ldv_beam(&self) -> Option<(f64, f64)> {
         let ldv = self.0.lock().ok().map(|s| Arc::clone(&s.ldv))?;
         let device = ldv.lock().ok()?;
-        let c = device.controller();
-        (c.laser() == metaplate_ldv_protocol::LaserState::On).then(|| (c.position().x.m(), c.position().y.m()))
+        device.controller().beam_m()
     }
 }
 

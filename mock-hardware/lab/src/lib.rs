@@ -10,8 +10,9 @@
 //! // ... hand `rig` to a recipe; keep `lab` alive while the rig is used ...
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-//! [`MockLab::rig`] gives a [`Rig`]: `LdvDriver` (over an in-process line, or over a pseudo-terminal through the
-//! real `serialport` transport), `DaqDriver` (over the mock DAQ's bulk protocol) and `AudioDriver` (over
+//! [`MockLab::rig`] gives a [`Rig`]: `PolytecDriver` (Polytec's RS-232 syntax to the mock controller
+//! [`UnitSpec::lab_default`], over an in-process line, or over a pseudo-terminal through the real `serialport`
+//! transport), the lab's own aimer ([`aim::LabAimer`]: the lab knows where the beam lands), `U6Driver` (the LabJack U6's USB functions to the mock U6) and `AudioDriver` (over
 //! [`MockPcm`]), all on one [`VirtualClock`], and the [`Wiring`]: actuator `i` on audio channel `i`, loopback on
 //! the channel after the last actuator (8 for the paper's 8 actuators), DAQ input 0 = LDV velocity, input 1 =
 //! loopback, rates from the scene.
@@ -27,14 +28,16 @@
 //!    from the one entry of the scene's physics and the lab's band, duration and rate, which holds every point).
 //! 4. The LDV turns velocity into its output voltage: noise `noise_rms_m_s / signal level` (the speckle level at
 //!    the spot, at least 0.05), dropouts (garbage across the range: random ones with the scene's
-//!    `dropout_probability` per playback, and the `ldv_dropout` windows; the next `SIG?` reads low), clipping at
-//!    the selected range's full scale, then volts = m/s / (range's m/s per V). The range and laser are read from
-//!    the mock controller, so the `VelocityScale` the driver reports converts the voltage back exactly; with the
-//!    laser off the output is 0 V. (The scene's `daq.volts_per_m_s` is the sensitivity of the range a recipe is
+//!    `dropout_probability` per playback, and the `ldv_dropout` windows; the next signal-level query reads low),
+//!    clipping at the selected range's full scale (10 V x the range), then volts = m/s / (range's m/s per V). The
+//!    range of the controller's first velocity decoder is read from the mock controller, so the `VelocityScale`
+//!    the driver reports converts the voltage back exactly; before the beam is first aimed the output is 0 V. (The scene's `daq.volts_per_m_s` is the sensitivity of the range a recipe is
 //!    expected to pick; the lab uses the range actually selected.)
 //! 5. The DAQ samples input 0 (LDV output) and input 1 (loopback channel × `loopback_volts_per_full_scale`) at its
 //!    true rate `fs_d = 24 kHz * (1 + daq ppm)` from the moment it was started, digitised to 16 bits with
-//!    clipping by the mock DAQ, and streamed through its bulk protocol to the real driver. A scene with another
+//!    clipping by the mock LabJack U6 (serial [`LAB_U6_SERIAL`], an ideal calibration: 20 V / 65536 per code on
+//!    +/-10 V, 0 V at code 32768, so the codes are the scene's 16-bit rule), and streamed as StreamData packets to
+//!    the real U6 driver. A scene with another
 //!    `daq.bits` (0: ideal) or `daq.clipping = false` gets an in-process DAQ instead (`direct_daq`: the same
 //!    samples, digitised as the scene says, no USB link and none of its faults), for error budgets.
 //!
@@ -117,6 +120,7 @@
 //!   is seen as a timeout (see `PtyServer`).
 
 mod accuracy;
+pub mod aim;
 pub mod budget;
 mod chain;
 mod direct_daq;
@@ -135,20 +139,23 @@ use metaplate_audio::AudioDriver;
 use metaplate_core::clock::VirtualClock;
 use metaplate_core::rig::{Rig, Wiring};
 use metaplate_core::scene::Scene;
-use metaplate_daq::{DaqDriver, DriverSettings};
-use metaplate_ldv::{LdvDriver, RetryPolicy};
+use metaplate_daq::{DriverSettings, U6Driver};
+use metaplate_ldv::{PolytecConfig, PolytecDriver, RetryPolicy};
 use metaplate_mock_audio::{FaultWindows, MockPcm};
-use metaplate_mock_daq::{MockDaq, MockTransport, usb6211_info};
-use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, MockLine, PtyServer, SpeckleModel};
+use metaplate_mock_daq::{MockTransport, MockU6, u6_info};
+use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, MockLine, PtyServer, UnitSpec};
 use metaplate_plate::actuator::VoiceCoil;
 use metaplate_plate::{GreensFunctions, GreensRequest, ModelOptions, greens_functions};
 use num_complex::Complex64;
 
 pub use chain::LabStats;
 
-/// Resolution of the mock DAQ's wire protocol, bits: a scene's DAQ of this resolution, clipping, records through
-/// it; any other is served in process (see the `daq` docs of the scene).
+/// Resolution of the U6's stream codes, bits: a scene's DAQ of this resolution, clipping, records through the
+/// mock U6; any other is served in process (see the `daq` docs of the scene).
 const PROTOCOL_BITS: u32 = 16;
+
+/// The serial number of the mock lab's U6 (what a dataset records as the DAQ's serial).
+pub const LAB_U6_SERIAL: u32 = 360_000_001;
 
 /// Why the lab could not be built or used.
 #[derive(Debug, thiserror::Error)]
@@ -343,8 +350,7 @@ impl MockLab {
         });
         let clock = Arc::new(VirtualClock::new());
         let windows = FaultWindows::new(&scene.faults);
-        let controller = MockController::new(&scene.ldv, scene.seed, "LAB-LDV-0001")
-            .map_err(|e| LabError::Driver { device: "LDV", detail: e.to_string() })?;
+        let controller = MockController::new(UnitSpec::lab_default(), &scene.ldv, scene.seed);
         let ldv = Arc::new(Mutex::new(
             MockDevice::new(controller, FaultSchedule::scripted(scene.seed, []))
                 .with_clock(Arc::clone(&clock))
@@ -378,14 +384,8 @@ impl MockLab {
             aim_error_rms_m: scene.ldv.aim_error_rms_m,
             band_hi_hz: hi,
         };
-        let state = chain::LabState::new(
-            params,
-            Arc::clone(&plate),
-            Arc::clone(&clock),
-            Arc::clone(&ldv),
-            SpeckleModel::new(&scene.ldv, scene.seed),
-            windows.clone(),
-        );
+        let state =
+            chain::LabState::new(params, Arc::clone(&plate), Arc::clone(&clock), Arc::clone(&ldv), windows.clone());
         let shared = chain::Shared(Arc::new(Mutex::new(state)));
         Ok(MockLab {
             scene,
@@ -419,8 +419,12 @@ impl MockLab {
             |e: metaplate_core::vibrometer::VibrometerError| LabError::Driver { device: "LDV", detail: e.to_string() };
         let vibrometer: Box<dyn metaplate_core::vibrometer::Vibrometer + Send> = match self.options.ldv_link {
             LdvLink::InProcess => Box::new(
-                LdvDriver::new(MockLine::new(Arc::clone(&self.ldv)), Arc::clone(&clock), RetryPolicy::default())
-                    .map_err(ldv_error)?,
+                PolytecDriver::new(
+                    MockLine::new(Arc::clone(&self.ldv)),
+                    RetryPolicy::default(),
+                    PolytecConfig::default(),
+                )
+                .map_err(ldv_error)?,
             ),
             #[cfg(feature = "pty")]
             LdvLink::Pty => {
@@ -429,7 +433,7 @@ impl MockLab {
                 let line = metaplate_ldv::SerialPortLine::open(selector)
                     .map_err(|e| LabError::Driver { device: "LDV", detail: e.to_string() })?;
                 *self.pty.lock().map_err(|_| LabError::Poisoned("the pty slot"))? = Some(server);
-                Box::new(LdvDriver::new(line, Arc::clone(&clock), RetryPolicy::default()).map_err(ldv_error)?)
+                Box::new(PolytecDriver::new(line, RetryPolicy::default(), PolytecConfig::default()).map_err(ldv_error)?)
             }
             // The real serial transport is a backend (`metaplate-ldv`'s feature `serial`), not built here.
             #[cfg(not(feature = "pty"))]
@@ -444,12 +448,12 @@ impl MockLab {
             && self.scene.daq.clipping
         {
             let source = Box::new(chain::LabSource(self.shared.clone()));
-            let device = MockDaq::new(usb6211_info("LAB-DAQ-0001"), source)
-                .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?;
+            let calibration = metaplate_u6_protocol::Calibration::ideal();
+            let device = MockU6::new(u6_info(LAB_U6_SERIAL), calibration, source);
             let transport = MockTransport::new(device, metaplate_mock_daq::FaultSchedule::none());
             let link = links::LabDaqLink::new(transport, Arc::clone(&self.clock), &self.windows, self.shared.clone());
             Box::new(
-                DaqDriver::open(link, DriverSettings::default())
+                U6Driver::open(link, DriverSettings::default())
                     .map_err(|e| LabError::Driver { device: "DAQ", detail: e.to_string() })?,
             )
         } else {
@@ -463,7 +467,8 @@ impl MockLab {
         }
         let pcm = MockPcm::new(&audio, Arc::clone(&self.clock), &self.scene.faults)
             .with_observer(Arc::new(self.shared.clone()));
-        Ok(Rig { vibrometer, daq, audio: Box::new(AudioDriver::new(pcm)), clock, wiring: self.wiring.clone() })
+        let aim = Box::new(aim::LabAimer::new(Arc::clone(&self.ldv), Arc::clone(&self.clock)));
+        Ok(Rig { vibrometer, aim, daq, audio: Box::new(AudioDriver::new(pcm)), clock, wiring: self.wiring.clone() })
     }
 
     /// The scene in force (with the seed override applied).

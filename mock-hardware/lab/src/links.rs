@@ -60,10 +60,11 @@ impl TimedFaults for LdvFaults {
     }
 }
 
-/// The mock DAQ's USB link with the scene's faults: `usb_stall` (every read inside the window times out, costing
-/// its timeout in virtual time), `daq_overrun` (once per window: the window's worth of packets, at least one, is
-/// dropped at the source and the next packet is flagged), `disconnect` (the device power-cycles and leaves the bus;
-/// reopening fails until the window's end). It also tells the lab when an acquisition starts (its sample 0 time).
+/// The mock U6's USB link with the scene's faults: `usb_stall` (every read inside the window times out, costing
+/// its timeout in virtual time), `daq_overrun` (once per window: the U6's buffer overflows and auto-recovery
+/// discards the window's worth of scans, at least one, reported by errorcodes 59 and 60), `disconnect` (the device
+/// power-cycles and leaves the bus; reopening fails until the window's end). It also tells the lab when a stream
+/// starts (its scan 0 time).
 pub(crate) struct LabDaqLink {
     inner: MockTransport,
     clock: Arc<VirtualClock>,
@@ -100,7 +101,29 @@ impl LabDaqLink {
                 self.dropped = true;
                 self.inner.device_mut().power_cycle();
             }
-            return Err(TransportError::Disconnected("mock DAQ is off the bus".into()));
+            return Err(TransportError::Disconnected("mock U6 is off the bus".into()));
+        }
+        Ok(())
+    }
+
+    /// A read on either IN endpoint: the bus, a stall, and the overflow due, before the transfer itself.
+    fn before_read(&mut self, timeout: Duration) -> Result<(), TransportError> {
+        self.check_bus()?;
+        let now_s = self.clock.now_s();
+        if self.windows.active(FaultKind::UsbStall, now_s).is_some() {
+            self.clock.advance(timeout.as_secs_f64());
+            return Err(TransportError::Timeout);
+        }
+        if let Some(fault) = self.windows.active(FaultKind::DaqOverrun, now_s).copied()
+            && !self.overruns_done.contains(&fault.at_s)
+            && self.inner.device().is_running()
+        {
+            self.overruns_done.push(fault.at_s);
+            if let Some(rate_hz) = self.inner.device().config().map(|c| c.scan_rate_hz()) {
+                let scans = (fault.duration_s * rate_hz).ceil().max(1.0);
+                // Saturating: a window longer than 2^64 scans is not a scene anyone writes.
+                self.inner.device_mut().overflow(scans as u64);
+            }
         }
         Ok(())
     }
@@ -120,29 +143,18 @@ impl BulkTransport for LabDaqLink {
     }
 
     fn read(&mut self, timeout: Duration) -> Result<Vec<u8>, TransportError> {
-        self.check_bus()?;
-        let now_s = self.clock.now_s();
-        if self.windows.active(FaultKind::UsbStall, now_s).is_some() {
-            self.clock.advance(timeout.as_secs_f64());
-            return Err(TransportError::Timeout);
-        }
-        if let Some(fault) = self.windows.active(FaultKind::DaqOverrun, now_s).copied()
-            && !self.overruns_done.contains(&fault.at_s)
-            && self.inner.device().is_running()
-        {
-            self.overruns_done.push(fault.at_s);
-            let config = self.inner.device().config().map(|c| (c.sample_rate_hz, c.samples_per_packet));
-            if let Some((rate_hz, spp)) = config {
-                let packets = (fault.duration_s * f64::from(rate_hz) / f64::from(spp.max(1))).ceil().max(1.0);
-                self.inner.device_mut().overrun(packets.min(f64::from(u32::MAX)) as u32);
-            }
-        }
+        self.before_read(timeout)?;
         self.inner.read(timeout)
+    }
+
+    fn read_stream(&mut self, max_len: usize, timeout: Duration) -> Result<Vec<u8>, TransportError> {
+        self.before_read(timeout)?;
+        self.inner.read_stream(max_len, timeout)
     }
 
     fn reopen(&mut self) -> Result<(), TransportError> {
         if !self.disconnects.reopen(self.clock.now_s()) {
-            return Err(TransportError::Disconnected("mock DAQ is still off the bus".into()));
+            return Err(TransportError::Disconnected("mock U6 is still off the bus".into()));
         }
         self.dropped = false;
         self.inner.reopen()

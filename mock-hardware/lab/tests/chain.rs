@@ -10,7 +10,7 @@ use metaplate_dsp::fft;
 use metaplate_lab::MockLab;
 use metaplate_lab::session::{Recording, configure, play_and_record};
 
-/// Laser on, a velocity range for about 20 mm/s, beam on the test point; returns the range's m/s per V.
+/// A velocity range for about 20 mm/s, beam on the test point; returns the range's m/s per V.
 fn ready(lab: &MockLab, rig: &mut Rig) -> f64 {
     let (x, y) = lab.scene().grid.position_m(common::point(lab.scene()));
     ready_at(rig, (x, y), 0.02)
@@ -19,9 +19,8 @@ fn ready(lab: &MockLab, rig: &mut Rig) -> f64 {
 /// As [`ready`], with the beam at `(x, y)`, m, and a velocity range of `range_m_s`.
 fn ready_at(rig: &mut Rig, (x, y): (f64, f64), range_m_s: f64) -> f64 {
     configure(rig, 2400).unwrap();
-    rig.vibrometer.set_laser(true).unwrap();
     let scale = rig.vibrometer.set_velocity_range(range_m_s).unwrap();
-    rig.vibrometer.move_to(x, y).unwrap();
+    rig.aim.aim_at(x, y).unwrap();
     scale.m_s_per_v
 }
 

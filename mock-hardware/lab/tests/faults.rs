@@ -37,7 +37,7 @@ fn c_every_fault_kind_is_seen_through_the_drivers_and_recovered_from() {
     let lab = common::lab(&scene, None);
     let mut rig = lab.rig().unwrap();
     configure(&mut rig, 2400).unwrap();
-    rig.vibrometer.set_laser(true).unwrap();
+    rig.aim.aim_at(0.0, 0.0).unwrap();
     assert!(rig.vibrometer.signal_level().unwrap() > 0.2);
 
     // LDV serial faults: every attempt fails inside the window (timeouts cost virtual time, well under 10 s).

@@ -9,13 +9,12 @@ use metaplate_lab::MockLab;
 use metaplate_lab::session::{Recording, configure, play_and_record};
 use metaplate_plate::actuator::VoiceCoil;
 
-/// Laser on, velocity range `range_m_s`, beam on the test point.
+/// Velocity range `range_m_s`, beam on the test point.
 fn ready(lab: &MockLab, rig: &mut Rig, range_m_s: f64) {
     let (x, y) = lab.scene().grid.position_m(common::point(lab.scene()));
     configure(rig, 2400).unwrap();
-    rig.vibrometer.set_laser(true).unwrap();
     rig.vibrometer.set_velocity_range(range_m_s).unwrap();
-    rig.vibrometer.move_to(x, y).unwrap();
+    rig.aim.aim_at(x, y).unwrap();
 }
 
 /// The same 0.5 s sweep recorded twice at the test point on one rig (the second a new measurement: new noise).

@@ -1,4 +1,4 @@
-//! The DAQ's bulk endpoints: recording and replay.
+//! The U6's bulk endpoints (commands, responses, stream): recording and replay.
 
 use std::io::Write;
 use std::time::Duration;
@@ -6,14 +6,14 @@ use std::time::Duration;
 use metaplate_cassette::{Body, Cassette, DeviceKind, Event};
 use metaplate_daq::{BulkTransport, TransportError};
 
-use crate::dialect::DaqDialect;
+use crate::dialect::U6Dialect;
 use crate::engine::{ByteReplay, ReplayStats};
 use crate::failure::Failure;
 use crate::faults::ReplayFaults;
 use crate::load::ReplayError;
 use crate::mismatch::Mismatch;
 use crate::recorder::Recorder;
-use crate::script::{EP_CONTROL, EP_IN, EP_OUT};
+use crate::script::{EP_CONTROL, EP_IN, EP_OUT, EP_STREAM};
 
 impl From<&TransportError> for Failure {
     fn from(e: &TransportError) -> Self {
@@ -36,7 +36,7 @@ fn transport_error(failure: Failure) -> TransportError {
 }
 
 /// A [`BulkTransport`] that passes every call to `T` and records it: each OUT transfer as a host-to-device
-/// record, each IN transfer as a device-to-host record, failures (timeout, stall, disconnect, other) as in
+/// record, each IN transfer as a device-to-host record (on [`EP_IN`] for responses, [`EP_STREAM`] for stream data), failures (timeout, stall, disconnect, other) as in
 /// [`Failure`], reopens as reconnect events. Timeouts asked for are not recorded.
 pub struct RecordingTransport<T: BulkTransport, W: Write + Send> {
     inner: T,
@@ -81,6 +81,16 @@ impl<T: BulkTransport, W: Write + Send> BulkTransport for RecordingTransport<T, 
         result
     }
 
+    fn read_stream(&mut self, max_len: usize, timeout: Duration) -> Result<Vec<u8>, TransportError> {
+        let result = self.inner.read_stream(max_len, timeout);
+        let bodies = match &result {
+            Ok(bytes) => vec![Body::DeviceToHost(bytes.clone())],
+            Err(e) => Failure::from(e).to_bodies(),
+        };
+        self.recorder.record(EP_STREAM, bodies);
+        result
+    }
+
     fn reopen(&mut self) -> Result<(), TransportError> {
         let result = self.inner.reopen();
         let bodies = match &result {
@@ -92,8 +102,8 @@ impl<T: BulkTransport, W: Write + Send> BulkTransport for RecordingTransport<T, 
     }
 }
 
-/// A [`BulkTransport`] that plays a DAQ cassette back to a driver, with [`ReplayFaults`]; commands are matched
-/// through [`DaqDialect`] (sequence numbers may shift after a retry). A deviation stops the driver with
+/// A [`BulkTransport`] that plays a U6 cassette back to a driver, with [`ReplayFaults`]; commands are matched
+/// through [`U6Dialect`] (byte for byte). A deviation stops the driver with
 /// `TransportError::Other` carrying the [`Mismatch`], also kept for [`mismatch`](Self::mismatch).
 pub struct ReplayTransport {
     engine: ByteReplay,
@@ -111,7 +121,7 @@ impl ReplayTransport {
     /// # Errors
     /// [`ReplayError::WrongDevice`] unless the cassette is a DAQ USB session.
     pub fn new(cassette: &Cassette, faults: ReplayFaults) -> Result<Self, ReplayError> {
-        let engine = ByteReplay::for_cassette(cassette, DeviceKind::DaqUsb, faults, Box::new(DaqDialect::default()))?;
+        let engine = ByteReplay::for_cassette(cassette, DeviceKind::DaqUsb, faults, Box::new(U6Dialect))?;
         Ok(Self { engine })
     }
 
@@ -142,6 +152,10 @@ impl BulkTransport for ReplayTransport {
     }
 
     fn read(&mut self, _timeout: Duration) -> Result<Vec<u8>, TransportError> {
+        self.engine.read().map_err(transport_error)
+    }
+
+    fn read_stream(&mut self, _max_len: usize, _timeout: Duration) -> Result<Vec<u8>, TransportError> {
         self.engine.read().map_err(transport_error)
     }
 

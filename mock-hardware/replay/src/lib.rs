@@ -32,8 +32,7 @@
 //!   ([`ReplayStats::faults_applied`] lists those that did).
 //!
 //! After a fault fires, the replay *recovers*: it expects the driver to retry. While recovering,
-//! 1. a driver write that is the last matched recorded write again (a resend; for the DAQ, the same command under
-//!    a new sequence number) rewinds the replay to just after that write, so the retry gets the recorded reply
+//! 1. a driver write that is the last matched recorded write again (a resend) rewinds the replay to just after that write, so the retry gets the recorded reply
 //!    again ([`ReplayStats::retries_replayed`]); recovery ends, and recorded reads of that exchange the driver
 //!    has not consumed by its next write are skipped (while it waited for the faulted reply it may have read
 //!    their like already: a DAQ reads the sample stream while it waits for `Start`'s acknowledgement);
@@ -41,18 +40,17 @@
 //!    driver has given up on) continues the session; recovery ends;
 //! 3. else a write that repeats an earlier recorded write byte for byte (a setting the LDV driver re-applies
 //!    after a reconnect) gets that exchange's recorded replies again, without moving the replay;
-//! 4. else the device's [`Dialect`] may answer a command in no recorded exchange: the LDV's `SYNC <t>` gets its
-//!    echo ([`ReplayStats::synthesized`]);
+//! 4. else the device's [`Dialect`] may answer a command in no recorded exchange ([`ReplayStats::synthesized`];
+//!    a Polytec controller's [`PolytecDialect`] makes nothing up);
 //! 5. else it is a mismatch;
 //! 6. a read with no recorded read next gets a timeout (the device is quiet until the driver sends again)
 //!    instead of a mismatch.
 //!
-//! So a fault the driver's retry logic absorbs (an LDV reply timed out, garbled or cut short: resynchronise and
-//! resend; a DAQ reply stalled or lost: drain and resend) ends in the same results as the clean replay, and a
+//! So a fault the driver's retry logic absorbs (an LDV reply timed out, garbled or cut short: discard what is waiting
+//! and resend; a DAQ reply stalled or lost: drain and resend) ends in the same results as the clean replay, and a
 //! fault it cannot absorb shows as the driver's typed error (a disconnect; a dropped sample packet as
-//! `packets_lost` in the next block's integrity, and one read short at the end of the stream). For the DAQ a
-//! resend carries the next sequence number: from then on [`DaqDialect`] expects every command at the recorded
-//! number plus that offset and shifts every recorded reply's `of_seq` by it.
+//! `packets_lost` in the next block's integrity, and one read short at the end of the stream). A U6 command
+//! carries no sequence number: a resend is the recorded bytes again ([`U6Dialect`]).
 //!
 //! # Sessions
 //!
@@ -78,7 +76,7 @@ pub mod summary;
 
 pub use audio::{RecordingSink, ReplaySink};
 pub use bulk::{RecordingTransport, ReplayTransport};
-pub use dialect::{DaqDialect, LdvDialect};
+pub use dialect::{PolytecDialect, U6Dialect};
 pub use engine::{Dialect, ExactDialect, ReplayStats};
 pub use failure::Failure;
 pub use faults::{FaultKind, FaultSpecError, ReplayFaults};

@@ -5,7 +5,7 @@ use std::io::Write;
 use metaplate_cassette::{Body, Cassette, DeviceKind};
 use metaplate_ldv::{LineError, SerialLine};
 
-use crate::dialect::LdvDialect;
+use crate::dialect::PolytecDialect;
 use crate::engine::{ByteReplay, ReplayStats};
 use crate::failure::Failure;
 use crate::faults::ReplayFaults;
@@ -112,7 +112,7 @@ impl ReplayLine {
     /// # Errors
     /// [`ReplayError::WrongDevice`] unless the cassette is an LDV serial session.
     pub fn new(cassette: &Cassette, faults: ReplayFaults) -> Result<Self, ReplayError> {
-        let engine = ByteReplay::for_cassette(cassette, DeviceKind::LdvSerial, faults, Box::new(LdvDialect))?;
+        let engine = ByteReplay::for_cassette(cassette, DeviceKind::LdvSerial, faults, Box::new(PolytecDialect))?;
         Ok(Self { engine, carry: Vec::new() })
     }
 

@@ -1,7 +1,8 @@
 //! A byte device's cassette as the sequence of transport calls it recorded.
 //!
 //! Endpoints: [`EP_OUT`] for host writes (a `HostToDevice` record, or stream blocks for audio), [`EP_IN`] for
-//! reads (a `DeviceToHost` record, or a failure), [`EP_CONTROL`] for open, close and reopen. A failed call is
+//! reads (a `DeviceToHost` record, or a failure), [`EP_STREAM`] for reads of a second IN endpoint (the U6's stream
+//! data), [`EP_CONTROL`] for open, close and reopen. A failed call is
 //! recorded as described in [`crate::Failure`], on the call's endpoint, right after the call's own record.
 
 use metaplate_cassette::{Body, Event, Record};
@@ -14,6 +15,9 @@ pub const EP_OUT: u16 = 0;
 pub const EP_IN: u16 = 1;
 /// Endpoint of session control: open, close, reopen.
 pub const EP_CONTROL: u16 = 2;
+/// Endpoint of reads from a device's second IN endpoint (the U6's StreamData). Replay serves reads of both IN
+/// endpoints in recorded order (a driver's calls are sequential); it does not check which endpoint a read asked.
+pub const EP_STREAM: u16 = 3;
 
 /// One recorded call of a byte transport.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,9 +82,11 @@ pub fn byte_steps(records: &[Record]) -> (Vec<Step>, usize) {
                 let (failure, extra) = failure_after(records, i, EP_OUT).map_or((None, 0), |(f, n)| (Some(f), n));
                 (Some(Step::Write { record: i, bytes: bytes.clone(), failure }), 1 + extra)
             }
-            (Body::DeviceToHost(bytes), EP_IN) => (Some(Step::Read { record: i, result: Ok(bytes.clone()) }), 1),
+            (Body::DeviceToHost(bytes), EP_IN | EP_STREAM) => {
+                (Some(Step::Read { record: i, result: Ok(bytes.clone()) }), 1)
+            }
             (Body::Event(Event::Reconnect), EP_CONTROL) => (Some(Step::Reopen { record: i, failure: None }), 1),
-            (Body::Event(_), EP_IN) => match failure_at(records, i) {
+            (Body::Event(_), EP_IN | EP_STREAM) => match failure_at(records, i) {
                 Some((failure, n)) => (Some(Step::Read { record: i, result: Err(failure) }), n),
                 None => (None, 1),
             },

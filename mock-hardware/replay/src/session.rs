@@ -5,16 +5,16 @@ use std::io::Write;
 use std::sync::{Arc, Mutex};
 
 use metaplate_cassette::{Cassette, DeviceIdentity, DeviceKind, Header};
-use metaplate_core::clock::{Clock, RealClock, VirtualClock};
+use metaplate_core::clock::{RealClock, VirtualClock};
 use metaplate_core::daq::{BlockIntegrity, Daq, DaqChannel, DaqConfig};
 use metaplate_core::scene::LdvSpec;
 use metaplate_core::vibrometer::{Tracking, Vibrometer};
-use metaplate_daq::{DaqDriver, DriverSettings};
-use metaplate_daq_protocol::{DeviceDecoder, HostCommand};
-use metaplate_ldv::{LdvDriver, RetryPolicy};
-use metaplate_ldv_protocol::{Command, CommandDecoder};
-use metaplate_mock_daq::{FaultSchedule as DaqFaults, MockDaq, MockTransport, usb6211_info};
-use metaplate_mock_ldv::{FaultSchedule as LdvFaults, MockController, MockDevice, MockLine};
+use metaplate_daq::{DriverSettings, U6Driver};
+use metaplate_ldv::{PolytecConfig, PolytecDriver, RetryPolicy};
+use metaplate_mock_daq::{FaultSchedule as DaqFaults, MockTransport, MockU6, u6_info};
+use metaplate_mock_ldv::{FaultSchedule as LdvFaults, MockController, MockDevice, MockLine, UnitSpec};
+use metaplate_polytec_protocol::{Request, RequestDecoder};
+use metaplate_u6_protocol::{Calibration, Command, StreamConfig};
 
 use metaplate_audio::AudioDriver;
 use metaplate_core::audio::{AudioConfig, AudioOut};
@@ -151,45 +151,44 @@ fn recorded_writes(cassette: &Cassette) -> Vec<Vec<u8>> {
         .collect()
 }
 
-/// The driver calls implied by an LDV recording: each command other than `SYNC` (which the driver sends by
-/// itself) is one `exchange`, except a resend (the same command again after a `SYNC`: a retry the driver will
-/// make by itself).
-fn ldv_commands(cassette: &Cassette) -> Vec<Command> {
-    let mut commands: Vec<Command> = Vec::new();
-    let mut synced_since_last = false;
-    for bytes in recorded_writes(cassette) {
-        let mut decoder = CommandDecoder::new();
-        decoder.push(&bytes);
-        while let Some(Ok(command)) = decoder.poll() {
-            if matches!(command, Command::Sync(_)) {
-                synced_since_last = true;
-                continue;
+/// The requests implied by an LDV recording, one `exchange` each, except a resend (the same request again with
+/// no reply recorded since it: a retry the driver will make by itself).
+fn ldv_requests(cassette: &Cassette) -> Vec<Request> {
+    let mut requests: Vec<Request> = Vec::new();
+    let mut answered_since_last = true;
+    for step in byte_steps(&cassette.records).0 {
+        match step {
+            Step::Write { bytes, .. } => {
+                let mut decoder = RequestDecoder::new();
+                decoder.push(&bytes);
+                while let Some(Ok(request)) = decoder.poll() {
+                    let resend = !answered_since_last && requests.last() == Some(&request);
+                    if !resend {
+                        requests.push(request);
+                    }
+                    answered_since_last = !requests.last().is_some_and(|r| r.verb().expects_reply());
+                }
             }
-            let resend = synced_since_last && commands.last() == Some(&command);
-            if !resend {
-                commands.push(command);
-            }
-            synced_since_last = false;
+            Step::Read { result: Ok(bytes), .. } if !bytes.is_empty() => answered_since_last = true,
+            _ => {}
         }
     }
-    commands
+    requests
 }
 
-/// Replays an LDV session: a fresh [`LdvDriver`] over a [`ReplayLine`], one `exchange` per recorded command.
+/// Replays an LDV session: a fresh [`PolytecDriver`] over a [`ReplayLine`], one `exchange` per recorded request.
 /// Stops at a mismatch.
 ///
 /// # Errors
 /// [`ReplayError::WrongDevice`] unless it is an LDV cassette.
 pub fn replay_ldv(cassette: &Cassette, faults: ReplayFaults) -> Result<SessionReport, ReplayError> {
     let line = ReplayLine::new(cassette, faults)?;
-    // Replay answers at once, so the clock only serves busy waits, which a virtual clock makes free.
-    let clock: Arc<dyn Clock> = Arc::new(VirtualClock::new());
-    let mut driver = LdvDriver::new(line, clock, RetryPolicy::default())
+    let mut driver = PolytecDriver::new(line, RetryPolicy::default(), PolytecConfig::default())
         .map_err(|e| ReplayError::Io { path: "LDV driver".into(), source: std::io::Error::other(e.to_string()) })?;
     let mut calls = Vec::new();
-    for command in ldv_commands(cassette) {
-        let result = driver.exchange(command).map(|reply| reply.to_string()).map_err(|e| e.to_string());
-        calls.push(CallOutcome { call: format!("exchange({command})"), result });
+    for request in ldv_requests(cassette) {
+        let result = driver.exchange(&request).map(|reply| reply.unwrap_or_default()).map_err(|e| e.to_string());
+        calls.push(CallOutcome { call: format!("exchange({request})"), result });
         if driver.line().mismatch().is_some() {
             break;
         }
@@ -207,22 +206,22 @@ pub fn replay_ldv(cassette: &Cassette, faults: ReplayFaults) -> Result<SessionRe
     })
 }
 
-fn daq_config(wire: &metaplate_daq_protocol::Configure) -> DaqConfig {
+/// The driver configuration a recorded StreamConfig came from: its channels and rate; blocks of one packet's scans
+/// (the block length is the host's, not on the wire; it changes how blocks are cut, not the transfers).
+fn daq_config(wire: &StreamConfig) -> DaqConfig {
+    let n = wire.channels.len().max(1);
     DaqConfig {
-        channels: wire
-            .channels
-            .iter()
-            .map(|c| DaqChannel { input: c.index, range_v: f64::from(c.range_mv) / 1000.0 })
-            .collect(),
-        sample_rate_hz: f64::from(wire.sample_rate_hz),
-        block_len_samples: u32::from(wire.samples_per_packet),
+        channels: wire.channels.iter().map(|c| DaqChannel { input: c.positive, range_v: c.gain.range_v() }).collect(),
+        sample_rate_hz: wire.scan_rate_hz(),
+        block_len_samples: u32::from(wire.samples_per_packet) / n as u32,
     }
 }
 
-/// Replays a DAQ session: `DaqDriver::open` (its `GetInfo`) over a [`ReplayTransport`], then per recorded
-/// command `configure`, `start` (then `read_block` while the recording reads), `stop`; the same command twice in
-/// a row is a retry the driver makes by itself; `GetInfo` after the first and `Reset` have no driver call and are
-/// skipped (the replay then reports the mismatch). Stops at a mismatch.
+/// Replays a U6 session: `U6Driver::open` (StreamStop, ConfigU6, ReadCal 0-3) over a [`ReplayTransport`], then
+/// per recorded command StreamConfig `configure`, StreamStart `start` (then `read_block` while the recording
+/// reads), StreamStop `stop`; the same command twice in a row is a retry the driver makes by itself; ConfigU6 and
+/// ReadCal (a reopen's) have no driver call of their own and are skipped (the replay then reports the mismatch).
+/// Stops at a mismatch.
 ///
 /// # Errors
 /// [`ReplayError::WrongDevice`] unless it is a DAQ cassette.
@@ -230,7 +229,7 @@ pub fn replay_daq(cassette: &Cassette, faults: ReplayFaults) -> Result<SessionRe
     let transport = ReplayTransport::new(cassette, faults)?;
     let mut calls = Vec::new();
     let mut blocks = Vec::new();
-    let mut driver = match DaqDriver::open(transport, DriverSettings::default()) {
+    let mut driver = match U6Driver::open(transport, DriverSettings::default()) {
         Ok(driver) => {
             calls.push(CallOutcome { call: "open".into(), result: Ok(format!("{:?}", driver.identity())) });
             driver
@@ -251,23 +250,25 @@ pub fn replay_daq(cassette: &Cassette, faults: ReplayFaults) -> Result<SessionRe
             });
         }
     };
-    let mut previous: Option<HostCommand> = Some(HostCommand::GetInfo);
-    for bytes in recorded_writes(cassette).iter().skip(1) {
-        let mut decoder = DeviceDecoder::new();
-        decoder.push(bytes);
-        let Some(Ok(frame)) = decoder.poll() else { continue };
-        let command = frame.message;
+    // The opening's commands: StreamStop (before any StreamConfig), ConfigU6, ReadCal.
+    let mut previous: Option<Command> = None;
+    let mut configured = false;
+    for bytes in recorded_writes(cassette) {
+        let Ok(command) = Command::decode(&bytes) else { continue };
         if previous.as_ref() == Some(&command) {
             continue;
         }
         previous = Some(command.clone());
         let (call, result) = match &command {
-            HostCommand::Configure(wire) => ("configure", driver.configure(&daq_config(wire)).map(|()| "ok".into())),
-            HostCommand::Start => ("start", driver.start().map(|()| "ok".into())),
-            HostCommand::Stop => ("stop", driver.stop().map(|()| "ok".into())),
-            HostCommand::GetInfo | HostCommand::Reset => continue,
+            Command::StreamConfig(wire) => {
+                configured = true;
+                ("configure", driver.configure(&daq_config(wire)).map(|()| "ok".into()))
+            }
+            Command::StreamStart => ("start", driver.start().map(|()| "ok".into())),
+            Command::StreamStop if configured => ("stop", driver.stop().map(|()| "ok".into())),
+            Command::StreamStop | Command::ConfigU6 | Command::ReadMem { .. } => continue,
         };
-        let started = matches!(command, HostCommand::Start) && result.is_ok();
+        let started = matches!(command, Command::StreamStart) && result.is_ok();
         calls.push(CallOutcome { call: call.into(), result: result.map_err(|e| e.to_string()) });
         if started {
             while driver.transport().next_is_read() && driver.transport().mismatch().is_none() {
@@ -325,45 +326,49 @@ pub fn demo_ldv_spec() -> LdvSpec {
     }
 }
 
-/// Records a short LDV session against the mock controller (seed 11, serial `SN04512`, its virtual clock
-/// timing the records) into `out`: identify, laser on, velocity range for 0.1 m/s, medium tracking, then two
-/// points (move, signal level), laser off. Returns the calls' results.
+/// Records a short LDV session against the mock Polytec controller ([`UnitSpec::lab_default`], seed 11, its
+/// virtual clock timing the records) into `out`: identify, velocity range for 0.1 m/s, medium tracking, the signal
+/// level at two beam spots (the beam put there as an aimer would). Returns the calls' results.
 ///
 /// # Errors
 /// [`DemoError`].
 pub fn record_mock_ldv<W: Write + Send>(out: W) -> Result<Vec<CallOutcome>, DemoError> {
-    let controller = MockController::new(&demo_ldv_spec(), 11, "SN04512").map_err(session_error)?;
+    let controller = MockController::new(UnitSpec::lab_default(), &demo_ldv_spec(), 11);
     let clock = Arc::new(VirtualClock::new());
     let device = Arc::new(Mutex::new(MockDevice::new(controller, LdvFaults::none()).with_clock(clock.clone())));
     let identity = DeviceIdentity {
-        vendor: "Ometron".into(),
-        model: "8330".into(),
-        serial: "SN04512".into(),
-        firmware: "2.14".into(),
+        vendor: "Polytec".into(),
+        model: "OFV-5000 Vibrometer Controller".into(),
+        serial: "not reported over RS-232".into(),
+        firmware: "3.4".into(),
     };
     let header = Header { device_kind: DeviceKind::LdvSerial, identity, start_unix_ns: 0 };
-    let recorder = Recorder::start(out, &header, clock.clone())?;
-    let line = RecordingLine::new(MockLine::new(device), recorder.clone());
-    let mut ldv = LdvDriver::new(line, clock, RetryPolicy::default()).map_err(session_error)?;
+    let recorder = Recorder::start(out, &header, clock)?;
+    let line = RecordingLine::new(MockLine::new(device.clone()), recorder.clone());
+    let mut ldv = PolytecDriver::new(line, RetryPolicy::default(), PolytecConfig::default()).map_err(session_error)?;
     let mut calls = Vec::new();
     let mut push = |call: &str, result: Result<String, String>| calls.push(CallOutcome { call: call.into(), result });
     push("identify", ldv.identify().map(|id| format!("{id:?}")).map_err(|e| e.to_string()));
-    push("set_laser(on)", ldv.set_laser(true).map(|()| "ok".into()).map_err(|e| e.to_string()));
     push("set_velocity_range(0.1)", ldv.set_velocity_range(0.1).map(|s| format!("{s:?}")).map_err(|e| e.to_string()));
     push("set_tracking(medium)", ldv.set_tracking(Tracking::Medium).map(|()| "ok".into()).map_err(|e| e.to_string()));
     for (x_m, y_m) in [(0.01, 0.02), (-0.03, 0.045)] {
-        let moved = ldv.move_to(x_m, y_m).map(|()| "ok".into()).map_err(|e| e.to_string());
-        push(&format!("move_to({x_m}, {y_m})"), moved);
-        push("signal_level", ldv.signal_level().map(|l| l.to_string()).map_err(|e| e.to_string()));
+        device
+            .lock()
+            .map_err(|_| DemoError::Session("the mock LDV lock is poisoned".into()))?
+            .controller_mut()
+            .set_beam(x_m, y_m);
+        push(
+            &format!("signal_level at ({x_m}, {y_m})"),
+            ldv.signal_level().map(|l| l.to_string()).map_err(|e| e.to_string()),
+        );
     }
-    push("set_laser(off)", ldv.set_laser(false).map(|()| "ok".into()).map_err(|e| e.to_string()));
     recorder.finish()?;
     Ok(calls)
 }
 
-/// Records a short DAQ session against the mock DAQ (serial `SN0001`; input 0 a 7 V 440 Hz sine, input 3 a
-/// 0.8 V 1 kHz sine) into `out`: open, configure two channels at 24 kHz in blocks of 240 samples, start, read
-/// `blocks` blocks, stop. Records are timed on the wall clock. Returns the blocks read.
+/// Records a short DAQ session against the mock U6 (serial [`DEMO_U6_SERIAL`], nominal calibration; AIN0 a 7 V
+/// 440 Hz sine, AIN3 a 0.8 V 1 kHz sine) into `out`: open, configure two channels at 24 kHz in blocks of 240
+/// scans, start, read `blocks` blocks, stop. Records are timed on the wall clock. Returns the blocks read.
 ///
 /// # Errors
 /// [`DemoError`].
@@ -379,17 +384,18 @@ pub fn record_mock_daq<W: Write + Send>(out: W, blocks: usize) -> Result<Vec<Blo
             *v = amplitude_v * (2.0 * std::f64::consts::PI * freq_hz * t_s).sin();
         }
     };
-    let device = MockDaq::new(usb6211_info("SN0001"), Box::new(source)).map_err(session_error)?;
+    let info = u6_info(DEMO_U6_SERIAL);
+    let device = MockU6::new(info, Calibration::nominal(), Box::new(source));
     let identity = DeviceIdentity {
-        vendor: "metaplate".into(),
-        model: "mock-6211".into(),
-        serial: "SN0001".into(),
-        firmware: "1.0.0".into(),
+        vendor: "LabJack".into(),
+        model: info.model().into(),
+        serial: DEMO_U6_SERIAL.to_string(),
+        firmware: info.firmware_version(),
     };
     let header = Header { device_kind: DeviceKind::DaqUsb, identity, start_unix_ns: 0 };
     let recorder = Recorder::start(out, &header, Arc::new(RealClock::new()))?;
     let transport = RecordingTransport::new(MockTransport::new(device, DaqFaults::none()), recorder.clone());
-    let mut daq = DaqDriver::open(transport, DriverSettings::default()).map_err(session_error)?;
+    let mut daq = U6Driver::open(transport, DriverSettings::default()).map_err(session_error)?;
     daq.configure(&demo_daq_config()).map_err(session_error)?;
     daq.start().map_err(session_error)?;
     let mut read = Vec::new();
@@ -403,7 +409,10 @@ pub fn record_mock_daq<W: Write + Send>(out: W, blocks: usize) -> Result<Vec<Blo
     Ok(read)
 }
 
-/// The demo DAQ configuration: input 0 at +/-10 V and input 3 at +/-1 V, 24 kHz, 240-sample blocks.
+/// The serial number of the demo sessions' mock U6.
+pub const DEMO_U6_SERIAL: u32 = 360_012_345;
+
+/// The demo DAQ configuration: input 0 at +/-10 V and input 3 at +/-1 V, 24 kHz, 240-scan blocks.
 pub fn demo_daq_config() -> DaqConfig {
     DaqConfig {
         channels: vec![DaqChannel { input: 0, range_v: 10.0 }, DaqChannel { input: 3, range_v: 1.0 }],

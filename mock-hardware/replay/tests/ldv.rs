@@ -1,4 +1,5 @@
-//! An LDV session recorded against the mock controller, replayed through a fresh `LdvDriver` over `ReplayLine`:
+//! An LDV session recorded against the mock Polytec controller, replayed through a fresh `PolytecDriver` over
+//! `ReplayLine`:
 //! clean, with faults the driver absorbs, with faults it reports, and with a driver that deviates. Every test is
 //! bounded: replay and the in-process mock answer at once (a read never waits), and the driver's loops are
 //! bounded by its retry policy.
@@ -9,11 +10,11 @@
 use std::sync::{Arc, Mutex};
 
 use metaplate_cassette::{Body, Cassette, DeviceIdentity, DeviceKind, Header};
-use metaplate_core::clock::{Clock, VirtualClock};
+use metaplate_core::clock::VirtualClock;
 use metaplate_core::vibrometer::{Tracking, Vibrometer, VibrometerError};
-use metaplate_ldv::{LdvDriver, RetryPolicy};
-use metaplate_ldv_protocol::{Command, encode_command};
-use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, MockLine};
+use metaplate_ldv::{PolytecConfig, PolytecDriver, RetryPolicy};
+use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, MockLine, UnitSpec};
+use metaplate_polytec_protocol::{Device, Request};
 use metaplate_replay::session::demo_ldv_spec;
 use metaplate_replay::{
     Deviation, FaultKind, Recorder, RecordingLine, ReplayError, ReplayFaults, ReplayLine, ReplayTransport, load_bytes,
@@ -23,28 +24,28 @@ use metaplate_replay::{
 fn session(ldv: &mut impl Vibrometer) -> Vec<String> {
     vec![
         format!("{:?}", ldv.identify()),
-        format!("{:?}", ldv.set_laser(true)),
         format!("{:?}", ldv.set_velocity_range(0.1)),
         format!("{:?}", ldv.set_tracking(Tracking::Fast)),
-        format!("{:?}", ldv.move_to(0.012, -0.034)),
         format!("{:?}", ldv.signal_level()),
-        format!("{:?}", ldv.move_to(0.05, 0.02)),
+        format!("{:?}", ldv.set_velocity_range(1.0)),
         format!("{:?}", ldv.signal_level()),
-        format!("{:?}", ldv.set_laser(false)),
-        // The laser is off: the controller refuses, a typed `Device` error that must replay too.
+        // A range beyond the decoder's largest full scale (10 m/s) is refused before anything is sent: a typed
+        // error that must replay too.
+        format!("{:?}", ldv.set_velocity_range(100.0)),
         format!("{:?}", ldv.signal_level()),
     ]
 }
 
 /// Records [`session`] against the mock controller: the cassette's bytes and the results.
 fn record() -> (Vec<u8>, Vec<String>) {
-    let controller = MockController::new(&demo_ldv_spec(), 5, "SN777").unwrap();
+    let mut controller = MockController::new(UnitSpec::lab_default(), &demo_ldv_spec(), 5);
+    controller.set_beam(0.012, -0.034);
     let clock = Arc::new(VirtualClock::new());
     let device = Arc::new(Mutex::new(MockDevice::new(controller, FaultSchedule::none()).with_clock(clock.clone())));
     let header = Header { device_kind: DeviceKind::LdvSerial, identity: DeviceIdentity::default(), start_unix_ns: 0 };
     let recorder = Recorder::start(Vec::new(), &header, clock.clone()).unwrap();
     let line = RecordingLine::new(MockLine::new(device), recorder.clone());
-    let mut ldv = LdvDriver::new(line, clock, RetryPolicy::default()).unwrap();
+    let mut ldv = PolytecDriver::new(line, RetryPolicy::default(), PolytecConfig::default()).unwrap();
     let results = session(&mut ldv);
     recorder.finish().unwrap();
     (recorder.with_writer(|w| w.clone()).unwrap(), results)
@@ -55,14 +56,18 @@ fn cassette() -> (Cassette, Vec<String>) {
     (Cassette::from_bytes(&bytes).unwrap(), results)
 }
 
-fn replay_driver(cassette: &Cassette, faults: ReplayFaults) -> LdvDriver<ReplayLine> {
-    let clock: Arc<dyn Clock> = Arc::new(VirtualClock::new());
-    LdvDriver::new(ReplayLine::new(cassette, faults).unwrap(), clock, RetryPolicy::default()).unwrap()
+fn replay_driver(cassette: &Cassette, faults: ReplayFaults) -> PolytecDriver<ReplayLine> {
+    PolytecDriver::new(ReplayLine::new(cassette, faults).unwrap(), RetryPolicy::default(), PolytecConfig::default())
+        .unwrap()
 }
 
-/// Index of the first device-to-host record after the host wrote `command`'s bytes.
-fn reply_record(cassette: &Cassette, command: &Command) -> usize {
-    let sent = encode_command(command);
+fn signal_query() -> Request {
+    Request::get(Device::SignalLevel, 0, "Value").unwrap()
+}
+
+/// Index of the first device-to-host record after the host first wrote `request`'s bytes.
+fn reply_record(cassette: &Cassette, request: &Request) -> usize {
+    let sent = request.encode();
     let write = cassette.records.iter().position(|r| r.body == Body::HostToDevice(sent.clone())).unwrap();
     write + 1 + cassette.records[write + 1..].iter().position(|r| matches!(r.body, Body::DeviceToHost(_))).unwrap()
 }
@@ -74,13 +79,12 @@ fn read_records(cassette: &Cassette) -> Vec<usize> {
 #[test]
 fn recording_timestamps_follow_the_mock_clock() {
     let (cassette, results) = cassette();
-    // The session itself ran fine, but for the last call: the laser is off.
-    assert!(results[..9].iter().all(|r| r.starts_with("Ok")), "{results:?}");
-    assert!(results[9].contains("Device"), "{}", results[9]);
+    // The session itself ran fine, but for the range beyond the decoder's: a typed refusal.
+    assert!(results.iter().enumerate().all(|(i, r)| r.starts_with("Ok") == (i != 6)), "{results:?}");
+    assert!(results[6].contains("InvalidArgument"), "{}", results[6]);
     let times: Vec<u64> = cassette.records.iter().map(|r| r.t_ns).collect();
     assert!(times.windows(2).all(|w| w[0] <= w[1]));
-    // The mock advances its virtual clock by each command's response time (laser on takes seconds), so the
-    // session spans a positive time.
+    // The mock advances its virtual clock by each request's response time, so the session spans a positive time.
     assert!(*times.last().unwrap() > 0, "{times:?}");
 }
 
@@ -98,22 +102,22 @@ fn clean_replay_gives_the_same_results_call_for_call() {
 }
 
 #[test]
-fn an_injected_timeout_is_absorbed_by_resync_and_resend() {
+fn an_injected_timeout_is_absorbed_by_a_resend() {
     let (cassette, recorded) = cassette();
-    let k = reply_record(&cassette, &Command::QuerySignal);
+    let k = reply_record(&cassette, &signal_query());
     let mut ldv = replay_driver(&cassette, ReplayFaults::none().with(k, FaultKind::Timeout));
     assert_eq!(session(&mut ldv), recorded);
     let stats = ldv.line().stats();
     assert_eq!(stats.faults_applied, vec![(k, FaultKind::Timeout)]);
-    // One resend answered from the recording, one SYNC echo made up.
-    assert_eq!((stats.retries_replayed, stats.synthesized), (1, 1));
+    // One resend answered from the recording; nothing made up (the syntax has no resynchronisation command).
+    assert_eq!((stats.retries_replayed, stats.synthesized), (1, 0));
     assert!(ldv.line().mismatch().is_none() && ldv.line().is_finished());
 }
 
 #[test]
 fn a_garbled_reply_is_absorbed() {
     let (cassette, recorded) = cassette();
-    let k = reply_record(&cassette, &Command::Identify);
+    let k = reply_record(&cassette, &Request::dev_info(Device::Controller, 0, "Name").unwrap());
     let mut ldv = replay_driver(&cassette, ReplayFaults::none().with(k, FaultKind::Garble));
     assert_eq!(session(&mut ldv), recorded);
     assert_eq!(ldv.line().stats().retries_replayed, 1);
@@ -138,23 +142,24 @@ fn every_read_faulted_in_turn_gives_the_same_results() {
 #[test]
 fn an_injected_disconnect_is_the_drivers_typed_error() {
     let (cassette, _) = cassette();
-    let k = reply_record(&cassette, &Command::QuerySignal);
+    let k = reply_record(&cassette, &signal_query());
     let mut ldv = replay_driver(&cassette, ReplayFaults::none().with(k, FaultKind::Disconnect));
     let results = session(&mut ldv);
-    // Calls before the faulted one are unaffected; it and every later one report the lost line.
-    assert!(results[..5].iter().all(|r| r.starts_with("Ok")), "{results:?}");
-    assert!(results[5..].iter().all(|r| r.contains("Disconnected")), "{results:?}");
+    // Calls before the faulted one are unaffected; it and every later one that reaches the line report the lost
+    // line (the refused range never reaches it).
+    assert!(results[..3].iter().all(|r| r.starts_with("Ok")), "{results:?}");
+    assert!(results[3..].iter().enumerate().all(|(i, r)| r.contains("Disconnected") || i + 3 == 6), "{results:?}");
     assert!(ldv.line().mismatch().is_none());
 }
 
 #[test]
 fn after_an_injected_disconnect_reconnect_and_retry_recover_the_session() {
     let (cassette, recorded) = cassette();
-    let k = reply_record(&cassette, &Command::QuerySignal);
+    let k = reply_record(&cassette, &signal_query());
     let mut ldv = replay_driver(&cassette, ReplayFaults::none().with(k, FaultKind::Disconnect));
     let mut results = session_until_signal(&mut ldv);
     assert!(results.last().unwrap().contains("Disconnected"), "{results:?}");
-    // Reconnect re-applies range, tracking, laser and position: commands the recording made earlier, answered
+    // Reconnect connects again and re-applies range and tracking: requests the recording made earlier, answered
     // with their recorded replies; then the failed call is retried and the session goes on as recorded.
     ldv.reconnect().unwrap();
     results.pop();
@@ -164,17 +169,17 @@ fn after_an_injected_disconnect_reconnect_and_retry_recover_the_session() {
 }
 
 fn session_until_signal(ldv: &mut impl Vibrometer) -> Vec<String> {
-    let mut results = session(&mut Prefix { inner: ldv, calls_left: 6 });
-    results.truncate(6);
+    let mut results = session(&mut Prefix { inner: ldv, calls_left: 4 });
+    results.truncate(4);
     results
 }
 
 fn session_after_signal(ldv: &mut impl Vibrometer) -> Vec<String> {
     vec![
         format!("{:?}", ldv.signal_level()),
-        format!("{:?}", ldv.move_to(0.05, 0.02)),
+        format!("{:?}", ldv.set_velocity_range(1.0)),
         format!("{:?}", ldv.signal_level()),
-        format!("{:?}", ldv.set_laser(false)),
+        format!("{:?}", ldv.set_velocity_range(100.0)),
         format!("{:?}", ldv.signal_level()),
     ]
 }
@@ -200,10 +205,6 @@ impl<V: Vibrometer> Vibrometer for Prefix<'_, V> {
         self.gate()?;
         self.inner.identify()
     }
-    fn move_to(&mut self, x_m: f64, y_m: f64) -> Result<(), VibrometerError> {
-        self.gate()?;
-        self.inner.move_to(x_m, y_m)
-    }
     fn signal_level(&mut self) -> Result<f64, VibrometerError> {
         self.gate()?;
         self.inner.signal_level()
@@ -219,10 +220,6 @@ impl<V: Vibrometer> Vibrometer for Prefix<'_, V> {
         self.gate()?;
         self.inner.set_tracking(tracking)
     }
-    fn set_laser(&mut self, on: bool) -> Result<(), VibrometerError> {
-        self.gate()?;
-        self.inner.set_laser(on)
-    }
     fn reconnect(&mut self) -> Result<(), VibrometerError> {
         self.gate()?;
         self.inner.reconnect()
@@ -234,14 +231,13 @@ fn a_driver_that_deviates_gets_the_mismatch() {
     let (cassette, _) = cassette();
     let mut ldv = replay_driver(&cassette, ReplayFaults::none());
     ldv.identify().unwrap();
-    ldv.set_laser(true).unwrap();
     // The recording set the range for 0.1 m/s (the 25 mm/s/V range, full scale 0.25 m/s); this driver asks for
     // 1 m/s.
     let err = ldv.set_velocity_range(1.0).unwrap_err();
     assert!(matches!(&err, VibrometerError::Disconnected { reason } if reason.contains("replay mismatch")), "{err}");
     let m = ldv.line().mismatch().unwrap().clone();
     assert_eq!(m.deviation, Deviation::Bytes);
-    let expected = encode_command(&Command::SetVelocityRange(metaplate_ldv_protocol::VelocityRange::MmPerS25));
+    let expected = Request::set(Device::VeloDec, 0, "Range", "25mm/s/V").unwrap().encode();
     assert_eq!(m.expected, expected);
     assert_eq!(cassette.records[m.record].body, Body::HostToDevice(expected.clone()));
     let first = m.first_difference.unwrap();
@@ -297,8 +293,7 @@ fn truncated_or_corrupt_cassettes_are_typed_errors_never_panics() {
 }
 
 /// A replay driver, or `None` when corruption changed the header's device kind.
-fn replay_driver_any(cassette: &Cassette) -> Option<LdvDriver<ReplayLine>> {
+fn replay_driver_any(cassette: &Cassette) -> Option<PolytecDriver<ReplayLine>> {
     let line = ReplayLine::new(cassette, ReplayFaults::none()).ok()?;
-    let clock: Arc<dyn Clock> = Arc::new(VirtualClock::new());
-    LdvDriver::new(line, clock, RetryPolicy::default()).ok()
+    PolytecDriver::new(line, RetryPolicy::default(), PolytecConfig::default()).ok()
 }

@@ -121,6 +121,12 @@ pub trait Plan {
     /// [`RecipeError::Config`] for a configuration the rig cannot play.
     fn setup(&mut self, instruments: &Instruments<'_>) -> Result<Self::Processor, RecipeError>;
 
+    /// Every position the plan may aim at before nudges, m, so the engine can ask the aimer whether each is within
+    /// reach before the run starts (empty: nothing to check).
+    fn aim_points(&self) -> Vec<(f64, f64)> {
+        Vec::new()
+    }
+
     /// The reference check after a device recovery, if the plan wants one.
     fn reference(&self) -> Option<ReferenceSpec> {
         None

@@ -43,6 +43,7 @@ pub struct RunReport {
 /// commits the session state after its last acquisition (what the next unit starts from, restored on resume).
 ///
 /// # Errors
+/// [`RecipeError::Aim`] before anything starts when a point of the plan is out of the aimer's reach;
 /// [`RecipeError::Interrupted`] when stopped on request (everything committed stays); device, store and
 /// configuration errors as [`RecipeError`] says.
 pub fn run<P: Plan>(
@@ -53,6 +54,10 @@ pub fn run<P: Plan>(
     control: &RunControl,
     observer: &mut dyn Observer,
 ) -> Result<RunReport, RecipeError> {
+    // Every point within the aimer's reach, or nothing starts (nudges, a fraction of a millimetre, are not checked).
+    for (x_m, y_m) in plan.aim_points() {
+        rig.aim.check_reachable(x_m, y_m)?;
+    }
     let mut meta = plan.meta(out);
     let rig_record = rig_config(rig)?;
     if let Some(report) = &out.preflight {

@@ -2,6 +2,7 @@
 //! recovery from device faults: reconnect,
 //! reopen, re-apply settings, poll while a device stays away.
 
+use metaplate_core::aim::AimError;
 use metaplate_core::audio::{AudioConfig, AudioError};
 use metaplate_core::daq::{DaqConfig, DaqError};
 use metaplate_core::rig::{PlayRecordError, Recording, Rig};
@@ -104,6 +105,7 @@ pub(crate) enum Fault {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Device {
     Vibrometer,
+    Aim,
     Daq,
     Audio,
 }
@@ -117,6 +119,12 @@ impl From<VibrometerError> for Fault {
         } else {
             Fault::Fatal(e.into())
         }
+    }
+}
+
+impl From<AimError> for Fault {
+    fn from(e: AimError) -> Self {
+        if e.suggests_reconnect() { Fault::Link(Device::Aim, e.to_string()) } else { Fault::Fatal(e.into()) }
     }
 }
 
@@ -223,11 +231,9 @@ impl<'a> Instruments<'a> {
     fn configure(&mut self) -> Result<(), Fault> {
         self.rig.daq.configure(&self.daq_config)?;
         self.rig.audio.configure(&self.audio_config)?;
-        // The laser on first: the level and velocity mean nothing without it (returns once it is stable).
-        self.rig.vibrometer.set_laser(true)?;
         self.scale = Some(self.rig.vibrometer.set_velocity_range(self.max_velocity_m_s)?);
         if let Some((x, y)) = self.beam_m {
-            self.rig.vibrometer.move_to(x, y)?;
+            self.rig.aim.aim_at(x, y)?;
         }
         Ok(())
     }
@@ -318,6 +324,7 @@ impl<'a> Instruments<'a> {
     fn reopen(&mut self, device: Device) -> Result<(), Fault> {
         match device {
             Device::Vibrometer => self.rig.vibrometer.reconnect().map_err(Fault::from),
+            Device::Aim => self.rig.aim.reconnect().map_err(Fault::from),
             Device::Daq => self.rig.daq.reopen().map_err(Fault::from),
             Device::Audio => self.rig.audio.reopen().map_err(Fault::from),
         }
@@ -326,7 +333,7 @@ impl<'a> Instruments<'a> {
     /// Moves the beam to (`x_m`, `y_m`) and reads the signal level there (0 to 1).
     pub(crate) fn aim(&mut self, x_m: f64, y_m: f64) -> Result<f64, Fault> {
         self.beam_m = Some((x_m, y_m));
-        self.rig.vibrometer.move_to(x_m, y_m)?;
+        self.rig.aim.aim_at(x_m, y_m)?;
         Ok(self.rig.vibrometer.signal_level()?)
     }
 

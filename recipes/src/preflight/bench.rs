@@ -35,7 +35,7 @@ impl<'a> Bench<'a> {
         self.rig.wiring.daq_sample_rate_hz
     }
 
-    /// The vibrometer answers its identity, switches its laser on and takes the velocity range.
+    /// The vibrometer answers its identity and takes the velocity range.
     pub(super) fn vibrometer(&mut self, max_velocity_m_s: f64) -> CheckOutcome {
         let ldv = &mut self.rig.vibrometer;
         let identity = match ldv.identify() {
@@ -54,20 +54,13 @@ impl<'a> Bench<'a> {
             "{} {} (serial {}, firmware {})",
             identity.vendor, identity.model, identity.serial, identity.firmware
         );
-        if let Err(e) = ldv.set_laser(true) {
-            return CheckOutcome::fail(
-                "vibrometer",
-                format!("{who} answers but its laser does not come on: {e}"),
-                details,
-            );
-        }
         match ldv.set_velocity_range(max_velocity_m_s) {
             Ok(scale) => {
                 self.scale = Some(scale);
                 CheckOutcome::pass(
                     "vibrometer",
                     format!(
-                        "{who} answers; laser on; range {} m/s full scale ({} m/s per V)",
+                        "{who} answers; range {} m/s full scale ({} m/s per V)",
                         scale.full_scale_m_s, scale.m_s_per_v
                     ),
                     merge(details, json!({"full_scale_m_s": scale.full_scale_m_s, "m_s_per_v": scale.m_s_per_v})),

@@ -71,7 +71,7 @@ impl Bench<'_> {
         let mut responses: Vec<Vec<Vec<f64>>> = Vec::with_capacity(sites_m.len());
         let mut moving = Vec::with_capacity(sites_m.len());
         for (a, &(x, y)) in sites_m.iter().enumerate() {
-            if let Err(e) = self.rig.vibrometer.move_to(x, y) {
+            if let Err(e) = self.rig.aim.aim_at(x, y) {
                 return CheckOutcome::fail(
                     "actuator_wiring",
                     format!("the beam cannot go to actuator {a}'s magnet at ({x:.4}, {y:.4}) m: {e}"),
@@ -155,7 +155,13 @@ impl Bench<'_> {
         let (mut levels, mut snrs_db, mut peak_m_s, mut clipped_at) = (Vec::new(), Vec::new(), 0.0_f64, Vec::new());
         let mut rows = Vec::new();
         for &(x, y) in &config.ldv_points_m {
-            let level = match self.rig.vibrometer.move_to(x, y).and_then(|()| self.rig.vibrometer.signal_level()) {
+            let level = match self
+                .rig
+                .aim
+                .aim_at(x, y)
+                .map_err(|e| e.to_string())
+                .and_then(|()| self.rig.vibrometer.signal_level().map_err(|e| e.to_string()))
+            {
                 Ok(level) => level,
                 Err(e) => {
                     let message = format!("the LDV at ({x:.4}, {y:.4}) m: {e}");

@@ -3,7 +3,7 @@
 //!
 //! The checks, in order (a check whose instruments failed is reported as not run, and fails):
 //! 1. `wiring`: the wiring is consistent (channels distinct, rates positive).
-//! 2. `vibrometer`: the LDV answers its identity, switches its laser on and takes the scan's velocity range.
+//! 2. `vibrometer`: the LDV answers its identity and takes the scan's velocity range.
 //! 3. `daq`: the DAQ takes the velocity and loopback inputs at the wiring's rate and range (its handshake was made
 //!    when it was opened).
 //! 4. `audio`: the audio interface opens at exactly the wiring's rate and channel count.
@@ -207,8 +207,7 @@ impl PreflightReport {
 }
 
 /// Runs every check on `rig`, calling `on_check` with each outcome as it is known (for progress), and returns them
-/// all. Device failures are outcomes, not errors: the point is to report them. The devices are left stopped, the
-/// laser on.
+/// all. Device failures are outcomes, not errors: the point is to report them. The devices are left stopped.
 ///
 /// # Errors
 /// [`RecipeError::Config`] when `config` does not fit the rig (a site per wired actuator, at least one LDV point,

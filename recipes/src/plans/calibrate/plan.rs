@@ -105,6 +105,10 @@ impl Plan for CalibrationPlan<'_> {
     type Detail = Phase;
     type Processor = CalibrationProcessor;
 
+    fn aim_points(&self) -> Vec<(f64, f64)> {
+        self.sites_m.to_vec()
+    }
+
     fn meta(&self, out: &Output) -> DatasetMeta {
         DatasetMeta::new(
             RECIPE,

@@ -336,6 +336,10 @@ impl Plan for ScanPlan<'_> {
         })
     }
 
+    fn aim_points(&self) -> Vec<(f64, f64)> {
+        self.path.points.iter().map(|&p| self.path.grid.position_m(p)).collect()
+    }
+
     fn start(&mut self, committed: &BTreeSet<(u32, u16)>) -> (usize, usize) {
         let actuators = self.actuators;
         let is_committed = |p: usize| (0..actuators).all(|a| committed.contains(&(p as u32, a as u16)));
