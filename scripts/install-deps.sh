@@ -46,7 +46,8 @@ fi
 # sit in different binaries, so `cargo test`, one binary at a time, leaves a core idle for minutes). This machine
 # kind ships it; elsewhere it is built once from crates.io (a few minutes).
 if ! cargo nextest --version >/dev/null 2>&1; then
-    cargo install cargo-nextest --locked
+    # Built as a tool, never linted as ours (.ci/run makes clippy the workspace's compiler).
+    env -u RUSTC_WORKSPACE_WRAPPER -u CLIPPY_ARGS cargo install cargo-nextest --locked
 fi
 
 echo "install-deps: done"
