@@ -36,5 +36,5 @@ pub use device::MockDevice;
 pub use faults::{Fault, FaultSchedule, TimedFaults};
 pub use inprocess::MockLine;
 pub use pty::{PtyError, PtyServer};
-pub use speckle::{DROPOUT_LEVEL_PERCENT, SpeckleModel};
+pub use speckle::{DROPOUT_LEVEL_PERCENT, SpeckleModel, quiet_spec};
 pub use unit::{DecoderSpec, UnitSpec};

@@ -42,6 +42,19 @@ impl SpeckleModel {
 
 pub(crate) use metaplate_core::rng::{mix64 as mix, unit_open as unit};
 
+/// A quiet, undisturbed vibrometer for demos and tests of the controller alone: 1 um/s noise, speckle around 0.7
+/// (spread 0.2), no dropouts, no aim error, 0.25 m/s full scale.
+pub fn quiet_spec() -> LdvSpec {
+    LdvSpec {
+        noise_rms_m_s: 1e-6,
+        speckle_mean_level: 0.7,
+        speckle_spread: 0.2,
+        dropout_probability: 0.0,
+        max_velocity_m_s: 0.25,
+        aim_error_rms_m: 0.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,14 +9,7 @@ use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, UnitSpec};
 pub const SEED: u64 = 11;
 
 pub fn spec() -> LdvSpec {
-    LdvSpec {
-        noise_rms_m_s: 1e-6,
-        speckle_mean_level: 0.7,
-        speckle_spread: 0.2,
-        dropout_probability: 0.0,
-        max_velocity_m_s: 0.25,
-        aim_error_rms_m: 0.0,
-    }
+    metaplate_mock_ldv::quiet_spec()
 }
 
 pub fn device(unit: UnitSpec, faults: FaultSchedule, clock: Arc<VirtualClock>) -> Arc<Mutex<MockDevice>> {

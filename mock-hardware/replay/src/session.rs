@@ -7,7 +7,6 @@ use std::sync::{Arc, Mutex};
 use metaplate_cassette::{Cassette, DeviceIdentity, DeviceKind, Header};
 use metaplate_core::clock::{RealClock, VirtualClock};
 use metaplate_core::daq::{BlockIntegrity, Daq, DaqChannel, DaqConfig};
-use metaplate_core::scene::LdvSpec;
 use metaplate_core::vibrometer::{Tracking, Vibrometer};
 use metaplate_daq::{DriverSettings, U6Driver};
 use metaplate_ldv::{PolytecConfig, PolytecDriver, RetryPolicy};
@@ -314,18 +313,6 @@ fn session_error(e: impl std::fmt::Display) -> DemoError {
     DemoError::Session(e.to_string())
 }
 
-/// The speckle and noise of the demo LDV.
-pub fn demo_ldv_spec() -> LdvSpec {
-    LdvSpec {
-        noise_rms_m_s: 1e-6,
-        speckle_mean_level: 0.7,
-        speckle_spread: 0.2,
-        dropout_probability: 0.0,
-        max_velocity_m_s: 0.25,
-        aim_error_rms_m: 0.0,
-    }
-}
-
 /// Records a short LDV session against the mock Polytec controller ([`UnitSpec::lab_default`], seed 11, its
 /// virtual clock timing the records) into `out`: identify, velocity range for 0.1 m/s, medium tracking, the signal
 /// level at two beam spots (the beam put there as an aimer would). Returns the calls' results.
@@ -333,7 +320,7 @@ pub fn demo_ldv_spec() -> LdvSpec {
 /// # Errors
 /// [`DemoError`].
 pub fn record_mock_ldv<W: Write + Send>(out: W) -> Result<Vec<CallOutcome>, DemoError> {
-    let controller = MockController::new(UnitSpec::lab_default(), &demo_ldv_spec(), 11);
+    let controller = MockController::new(UnitSpec::lab_default(), &metaplate_mock_ldv::quiet_spec(), 11);
     let clock = Arc::new(VirtualClock::new());
     let device = Arc::new(Mutex::new(MockDevice::new(controller, LdvFaults::none()).with_clock(clock.clone())));
     let identity = DeviceIdentity {

@@ -15,7 +15,6 @@ use metaplate_core::vibrometer::{Tracking, Vibrometer, VibrometerError};
 use metaplate_ldv::{PolytecConfig, PolytecDriver, RetryPolicy};
 use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, MockLine, UnitSpec};
 use metaplate_polytec_protocol::{Device, Request};
-use metaplate_replay::session::demo_ldv_spec;
 use metaplate_replay::{
     Deviation, FaultKind, Recorder, RecordingLine, ReplayError, ReplayFaults, ReplayLine, ReplayTransport, load_bytes,
 };
@@ -38,7 +37,7 @@ fn session(ldv: &mut impl Vibrometer) -> Vec<String> {
 
 /// Records [`session`] against the mock controller: the cassette's bytes and the results.
 fn record() -> (Vec<u8>, Vec<String>) {
-    let mut controller = MockController::new(UnitSpec::lab_default(), &demo_ldv_spec(), 5);
+    let mut controller = MockController::new(UnitSpec::lab_default(), &metaplate_mock_ldv::quiet_spec(), 5);
     controller.set_beam(0.012, -0.034);
     let clock = Arc::new(VirtualClock::new());
     let device = Arc::new(Mutex::new(MockDevice::new(controller, FaultSchedule::none()).with_clock(clock.clone())));
