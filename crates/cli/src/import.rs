@@ -44,14 +44,11 @@ pub fn run(args: &ImportArgs) -> anyhow::Result<()> {
     })?;
     bar.finish_and_clear();
     eprintln!(
-        "imported {} responses ({} from frequency responses) into {}: {} x {} grid at {} mm (from {}), {} Hz, {} \
-         samples, in {}",
+        "imported {} responses ({} from frequency responses) into {}: {} (from {}), {} Hz, {} samples, in {}",
         summary.rows,
         summary.from_frf,
         args.out.display(),
-        summary.grid.nx,
-        summary.grid.ny,
-        summary.grid.spacing_m * 1e3,
+        summary.placement(),
         summary.grid_from,
         summary.sample_rate_hz,
         summary.ir_len,

@@ -12,16 +12,17 @@
 //! The ID lines carry what an import needs to rebuild the dataset exactly ([`IdLines`](crate::IdLines)); other tools show them as
 //! text.
 
+use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use metaplate_core::grid::{GridSpec, GridSubset};
+use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
 use metaplate_dsp::fft;
 use metaplate_store::{BatchRows, Dataset, DatasetMeta, IR_UNIT_M_S_PER_N, Manifest, ReadOptions};
 use metaplate_uff::{
-    AxisCharacteristics, Complex64, Format, FunctionHeader, FunctionType, Node, Nodes2411, OrdinateRef, Precision,
+    AxisCharacteristics, Complex64, Dof, Format, FunctionHeader, FunctionType, Node, Nodes2411, OrdinateRef, Precision,
     UffEncoder, UffRecord, Units164,
 };
 
@@ -171,18 +172,22 @@ pub fn export(
     let encoder = UffEncoder::new(options.format, options.precision);
     let mut buffer = Vec::with_capacity(1 << 20);
     encoder.encode(&UffRecord::Units(Units164::si()), &mut buffer)?;
-    let reference_label = |actuator: u16| grid_label_count(&grid) + 1 + u32::from(actuator);
-    let mut nodes = Vec::with_capacity(points.len() + actuators.len());
+    let labels = NodeLabels::of(meta);
+    let mut nodes: Vec<Node> = Vec::with_capacity(points.len() + actuators.len());
     for &point in &points {
-        let (x_m, y_m) = grid.position_m(point as usize);
-        nodes.push(node(point + 1, x_m, y_m));
+        let (dof, position_m) = labels.point(point);
+        nodes.extend(node(dof.node, position_m));
     }
     for &actuator in &actuators {
         let Some(&(x_m, y_m)) = actuator_sites.get(usize::from(actuator)) else {
             refuse!("actuator {actuator} has no position in the scene ({} actuators)", actuator_sites.len());
         };
-        nodes.push(node(reference_label(actuator), x_m, y_m));
+        let (dof, original_m) = labels.reference(actuator);
+        nodes.extend(node(dof.node, original_m.unwrap_or([x_m, y_m, 0.0])));
     }
+    // A reference at a response node (a lab's reference transducer on a scan point) is one node.
+    let mut seen = std::collections::HashSet::new();
+    nodes.retain(|n| seen.insert(n.label));
     encoder.encode(&UffRecord::Nodes(Nodes2411 { nodes }), &mut buffer)?;
     sink.write_all(&buffer)?;
     let mut bytes = buffer.len() as u64;
@@ -204,8 +209,8 @@ pub fn export(
             if !wanted(row.point_index) {
                 continue;
             }
-            let labels = (row.point_index + 1, reference_label(row.actuator));
-            writer.encode(&shared.for_row(row), labels, row.sample_rate_hz, ir, &mut buffer)?;
+            let dofs = (labels.point(row.point_index).0, labels.reference(row.actuator).0);
+            writer.encode(&shared.for_row(row), dofs, row.sample_rate_hz, ir, &mut buffer)?;
             sink.write_all(&buffer)?;
             bytes += buffer.len() as u64;
             buffer.clear();
@@ -220,20 +225,81 @@ pub fn export(
     Ok(ExportSummary { records: done * per_pair, bytes, elapsed_s: started.elapsed().as_secs_f64() })
 }
 
-/// Node labels of the grid points (`1..=nx * ny`), so that actuators number after them.
-fn grid_label_count(grid: &GridSpec) -> u32 {
-    u32::try_from(grid.len()).unwrap_or(u32::MAX - u32::from(u16::MAX) - 1)
+/// The nodes an export writes: a dataset imported from universal files keeps its files' node labels, directions
+/// and 3-D positions (the import's `nodes` and `actuators` mappings); any other numbers grid points from 1
+/// (`point_index + 1`, at their position with z = 0, direction +Z) and actuators after them (`nx * ny + 1 +
+/// actuator`, at their magnets).
+struct NodeLabels {
+    /// Point index -> its original node, direction and position, m.
+    points: HashMap<u32, (Dof, [f64; 3])>,
+    /// Actuator -> its original reference node, direction, and position where the files gave one, m.
+    references: HashMap<u16, (Dof, Option<[f64; 3]>)>,
+    /// Positions of points without an original node, m.
+    meta: DatasetMeta,
 }
 
-/// A node of the default coordinate systems at (x, y, 0).
-fn node(label: u32, x_m: f64, y_m: f64) -> Node {
-    Node {
-        label,
-        export_coordinate_system: 1,
-        displacement_coordinate_system: 1,
-        color: 11,
-        position_m: [x_m, y_m, 0.0],
+impl NodeLabels {
+    fn of(meta: &DatasetMeta) -> Self {
+        let dof = |v: &serde_json::Value, node: &str, direction: &str| -> Option<Dof> {
+            let direction = i8::try_from(v[direction].as_i64()?).ok()?;
+            Some(Dof { entity: "NONE".to_owned(), node: v[node].as_i64()?, direction })
+        };
+        let position = |v: &serde_json::Value| -> Option<[f64; 3]> {
+            let p = v["position_m"].as_array()?;
+            match p.as_slice() {
+                [x, y, z] => Some([x.as_f64()?, y.as_f64()?, z.as_f64()?]),
+                _ => None,
+            }
+        };
+        let list = |key: &str| meta.config.get(key).and_then(|v| v.as_array()).cloned().unwrap_or_default();
+        let points: HashMap<u32, (Dof, [f64; 3])> = list("nodes")
+            .iter()
+            .filter_map(|v| {
+                let point = u32::try_from(v["point"].as_u64()?).ok()?;
+                Some((point, (dof(v, "node", "direction")?, position(v)?)))
+            })
+            .collect();
+        // Only with the points' nodes: the references' labels alone could collide with the numbered points'.
+        let references = if points.is_empty() {
+            HashMap::new()
+        } else {
+            list("actuators")
+                .iter()
+                .filter_map(|v| {
+                    let actuator = u16::try_from(v["actuator"].as_u64()?).ok()?;
+                    Some((actuator, (dof(v, "reference_node", "direction")?, position(v))))
+                })
+                .collect()
+        };
+        Self { points, references, meta: meta.clone() }
     }
+
+    /// The response degree of freedom of `point` and its node's position, m.
+    fn point(&self, point: u32) -> (Dof, [f64; 3]) {
+        if let Some((dof, p)) = self.points.get(&point) {
+            return (dof.clone(), *p);
+        }
+        let (x_m, y_m) = self.meta.position_m(point as usize).unwrap_or_default();
+        (Dof::z(point + 1), [x_m, y_m, 0.0])
+    }
+
+    /// The reference degree of freedom of `actuator`, and its original position, m, when the files gave one.
+    fn reference(&self, actuator: u16) -> (Dof, Option<[f64; 3]>) {
+        match self.references.get(&actuator) {
+            Some((dof, p)) => (dof.clone(), *p),
+            None => {
+                let label = u32::try_from(self.meta.grid.len()).unwrap_or(u32::MAX - u32::from(u16::MAX) - 1);
+                (Dof::z(label + 1 + u32::from(actuator)), None)
+            }
+        }
+    }
+}
+
+/// A node of the default coordinate systems at `position_m`; none for a label no node can have (0 or negative:
+/// "no node" to some writers, or beyond the format's).
+fn node(label: i64, position_m: [f64; 3]) -> Option<Node> {
+    let label = u32::try_from(label).ok().filter(|&l| l > 0)?;
+    Some(Node { label, export_coordinate_system: 1, displacement_coordinate_system: 1, color: 11, position_m })
 }
 
 /// The ordinate and denominator characteristics of the dataset's `ir`: velocity per newton (the ground truth, or an
@@ -271,12 +337,12 @@ struct RecordWriter {
 }
 
 impl RecordWriter {
-    /// Encodes the impulse response `ir` (and its FRF with `frequency`) of the (response, reference) node labels
-    /// into `out`.
+    /// Encodes the impulse response `ir` (and its FRF with `frequency`) of the (response, reference) degrees of
+    /// freedom into `out`.
     fn encode(
         &mut self,
         ids: &[String; 5],
-        (response, reference): (u32, u32),
+        (response, reference): (Dof, Dof),
         sample_rate_hz: f64,
         ir: &[f32],
         out: &mut Vec<u8>,
@@ -285,8 +351,8 @@ impl RecordWriter {
         self.samples.extend(ir.iter().map(|&v| f64::from(v)));
         let dt_s = 1.0 / sample_rate_hz;
         let start_s = -f64::from(self.pre_samples) * dt_s;
-        let mut header =
-            FunctionHeader::velocity_over_force(FunctionType::TimeResponse, response, reference, start_s, dt_s, "");
+        let mut header = FunctionHeader::velocity_over_force(FunctionType::TimeResponse, 0, 0, start_s, dt_s, "");
+        (header.response, header.reference) = (response, reference);
         header.id_lines = ids.clone();
         (header.ordinate, header.denominator) = self.axes.clone();
         self.encoder.encode_function(&header, OrdinateRef::Real(&self.samples), out)?;

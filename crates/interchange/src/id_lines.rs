@@ -8,7 +8,8 @@ use metaplate_store::{DatasetMeta, IrMeta, Status};
 ///
 /// 1. `metaplate point=P actuator=A [measured_at_us=T]`: the dataset key, and the row's measurement time (µs since
 ///    the Unix epoch) when it has one (up to 0.6 it was on line 4, where a long SNR cut it: both are read);
-/// 2. `metaplate grid=NXxNY spacing_m=H origin_m=X0,Y0`: the dataset's grid;
+/// 2. `metaplate grid=NXxNY spacing_m=H origin_m=X0,Y0`: the dataset's grid (`metaplate scattered=N` for points
+///    on no lattice, which an import places again by their nodes);
 /// 3. `metaplate scene=NAME scene_hash=HASH`: the scene id;
 /// 4. `metaplate status=S snr_db=X retries=R`: the row's quality (absent keys: not recorded);
 /// 5. `metaplate recipe=R seed=S [estimated_error_db=E]`: where the dataset came from, and the row's estimated error
@@ -28,7 +29,11 @@ impl SharedIds {
     /// The shared lines of the dataset described by `meta`.
     pub(crate) fn new(meta: &DatasetMeta) -> Self {
         Self {
-            grid: IdLines::grid(&meta.grid),
+            grid: match &meta.scattered {
+                // No grid to give: an import places scattered points again by their nodes.
+                Some(s) => format!("metaplate scattered={}", s.positions_m.len()),
+                None => IdLines::grid(&meta.grid),
+            },
             scene: cut(format!("metaplate scene={} scene_hash={}", word(&meta.scene.name), word(&meta.scene.hash))),
             source: cut(format!("metaplate recipe={} seed={}", word(&meta.recipe), meta.seed)),
         }

@@ -11,7 +11,10 @@
 //!   comes from the response nodes' positions (dataset 2411, or [`ImportOptions::nodes`]): one point is a 1 x 1
 //!   grid; points of constant z on an axis-aligned grid are snapped to it
 //!   ([`metaplate_core::grid::snap_to_grid`]); else the lattice of their plane is fitted ([`crate::lattice`]);
-//!   refused with both reasons when neither holds. The actuators are the responses' (reference node, direction)
+//!   else they are kept as scattered points (`metaplate_store::ScatteredPoints`: each at its position in their
+//!   plane, the grid only their index), which `analyze` and `focus` take as such. Nodes in 3-D are placed so even
+//!   when the ID lines carry a grid (an import exported again). Each point's node (label, direction, position)
+//!   and each reference's position are stored (`config.nodes`, `config.actuators`) for an export that keeps them. The actuators are the responses' (reference node, direction)
 //!   pairs, numbered from 0 in ascending order ([`ImportSummary::actuators`], stored in the manifest's
 //!   `config.actuators` with each reference's position in the grid's frame).
 //! - **Sample rate:** from the abscissa step by [`metaplate_uff::sample_rate_from_step`] (the whole hertz within
@@ -67,8 +70,11 @@ pub struct ImportSummary {
     pub from_frf: usize,
     /// The dataset's grid.
     pub grid: GridSpec,
-    /// Where the grid came from: "metaplate ID lines", "nodes" (a regular grid), "one point".
+    /// Where the grid came from: "metaplate ID lines", "nodes" (a regular grid), "one point", a lattice fitted in
+    /// 3-D ("nodes on a lattice: ..."), or "scattered points: ..." (the grid is then their index).
     pub grid_from: String,
+    /// The points lie on no lattice (`metaplate_store::ScatteredPoints`).
+    pub scattered: bool,
     /// Sample rate, Hz.
     pub sample_rate_hz: f64,
     /// Impulse response length, samples.
@@ -89,8 +95,8 @@ pub struct ImportSummary {
 /// `progress` is told the responses committed, out of those the files hold.
 ///
 /// # Errors
-/// A file that cannot be read or is malformed (with the record and line), nodes that form no grid, a response
-/// without its node, an ordinate that is no motion (unless [`ImportOptions::accept_unknown_quantity`]), responses
+/// A file that cannot be read or is malformed (with the record and line), two response nodes at one position, a
+/// response without its node, an ordinate that is no motion (unless [`ImportOptions::accept_unknown_quantity`]), responses
 /// of different quantities, sample rates or lengths, a store error. Each names the file, the record and line, and
 /// what would be accepted.
 pub fn import(
@@ -124,7 +130,7 @@ pub fn import(
         Some(csv) => read_nodes_csv(csv)?,
         None => survey.nodes.iter().map(|(&label, p)| (label, p.map(|v| v / length_per_m))).collect(),
     };
-    let Plan { grid, by_at, grid_from, actuators, placed, frame } =
+    let Plan { grid, by_at, grid_from, actuators, placed, frame, scattered } =
         plan(files, &survey, &first_ids, &options, &positions_m)?;
     // The references' positions in the grid's frame, where a node gives them (for an export without a scene).
     let reference_at = |node: i64| -> Option<(f64, f64)> {
@@ -143,6 +149,14 @@ pub fn import(
     let seen_at: HashMap<(usize, u64), usize> =
         survey.functions.iter().enumerate().map(|(i, seen)| (seen.at, i)).collect();
     let chosen = || by_at.keys().filter_map(|at| seen_at.get(at)).map(|&i| &survey.functions[i]);
+    // Each point's original node (label, direction, position in the files' frame, m), for an export that keeps them.
+    let mut point_nodes: Vec<(u32, i64, i8)> = by_at
+        .iter()
+        .filter_map(|(at, &(point, _))| seen_at.get(at).map(|&i| (point, &survey.functions[i])))
+        .map(|(point, seen)| (point, seen.response, seen.response_direction))
+        .collect();
+    point_nodes.sort_unstable();
+    point_nodes.dedup_by_key(|n| n.0);
     let Some(first) = chosen().min_by_key(|seen| seen.at) else { refuse!("no response was chosen") };
     let (motion, ordinate_to_si, conversion) = match &first.ordinate {
         OrdinateQuantity::Motion { motion, to_si, basis, .. } => {
@@ -239,15 +253,25 @@ pub fn import(
                         "direction": a.direction,
                         "x_m": at.map(|p| p.0),
                         "y_m": at.map(|p| p.1),
+                        "position_m": positions_m.get(&a.reference_node),
                     })
                 }).collect::<Vec<_>>(),
+                "nodes": point_nodes.iter().map(|&(point, node, direction)| json!({
+                    "point": point,
+                    "node": node,
+                    "direction": direction,
+                    "position_m": positions_m.get(&node),
+                })).collect::<Vec<_>>(),
                 "skipped": skipped_summary(&survey.skipped),
             });
             let serde_json::Value::Object(config) = config else {
                 refuse!("internal: configuration is not a JSON object")
             };
-            let meta = DatasetMeta::new("import-uff", config, scene.clone(), env!("CARGO_PKG_VERSION"), seed, grid)
+            let mut meta = DatasetMeta::new("import-uff", config, scene.clone(), env!("CARGO_PKG_VERSION"), seed, grid)
                 .with_description(description);
+            if let Some(scattered) = scattered.clone() {
+                meta = meta.with_scattered(scattered);
+            }
             writer = Some(DatasetWriter::create(out, meta, IfExists::Refuse).map_err(|source| {
                 InterchangeError::Dataset { what: format!("creating dataset {}", out.display()), source }
             })?);
@@ -274,6 +298,7 @@ pub fn import(
         from_frf,
         grid,
         grid_from,
+        scattered: scattered.is_some(),
         sample_rate_hz,
         ir_len,
         ir_unit,
@@ -281,6 +306,17 @@ pub fn import(
         actuators,
         skipped: survey.skipped,
     })
+}
+
+impl ImportSummary {
+    /// Where the points are, for the import's report: `143 scattered points`, or `4 x 3 grid at 5 mm`.
+    pub fn placement(&self) -> String {
+        if self.scattered {
+            format!("{} scattered points", self.grid.len())
+        } else {
+            format!("{} x {} grid at {} mm", self.grid.nx, self.grid.ny, self.grid.spacing_m * 1e3)
+        }
+    }
 }
 
 /// The skipped records counted by kind, each kind with its first place: `3 x dataset 58, function type 6

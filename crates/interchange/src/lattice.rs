@@ -134,20 +134,11 @@ fn smallest_eigenvector(mut m: [[f64; 3]; 3]) -> [f64; 3] {
     unit([vectors[0][smallest], vectors[1][smallest], vectors[2][smallest]])
 }
 
-/// The lattice the 3-D points `points_m` lie on, or why not.
-///
-/// # Errors
-/// A sentence: fewer than 2 points, more than [`MAX_LATTICE_POINTS`], a non-finite coordinate, points that do not
-/// lie on a lattice within [`LATTICE_TOLERANCE`] (with the worst point's distance), two on one node, a lattice of
-/// more than [`MAX_GRID_POINTS`].
-pub fn fit(points_m: &[[f64; 3]]) -> Result<Lattice, String> {
-    let n = points_m.len();
-    if !(2..=MAX_LATTICE_POINTS).contains(&n) {
-        return Err(format!("{n} points: a lattice is fitted to 2 to {MAX_LATTICE_POINTS}"));
-    }
-    if points_m.iter().flatten().any(|v| !v.is_finite()) {
-        return Err("a coordinate is not finite".into());
-    }
+/// The least-squares plane of `points_m` (finite, at least one): its frame (through the centroid, normal along the
+/// covariance's smallest eigenvector oriented towards +z, else +y, +x; u along the projection of x, or of y when x
+/// is the normal; no rotation) and the points' RMS distance from it, m.
+pub fn plane(points_m: &[[f64; 3]]) -> (Frame, f64) {
+    let n = points_m.len().max(1);
     let mut centroid = [0.0; 3];
     for p in points_m {
         for k in 0..3 {
@@ -179,16 +170,20 @@ pub fn fit(points_m: &[[f64; 3]]) -> Result<Lattice, String> {
     let along = dot(x_axis, normal);
     let u = unit([x_axis[0] - along * normal[0], x_axis[1] - along * normal[1], x_axis[2] - along * normal[2]]);
     let v = cross(normal, u);
-    let mut frame = Frame { centroid_m: centroid, u, v, normal, rotation_rad: 0.0 };
+    let frame = Frame { centroid_m: centroid, u, v, normal, rotation_rad: 0.0 };
     let plane_rms_m = (points_m
         .iter()
         .map(|p| dot([p[0] - centroid[0], p[1] - centroid[1], p[2] - centroid[2]], normal).powi(2))
         .sum::<f64>()
         / n as f64)
         .sqrt();
-    let flat: Vec<(f64, f64)> = points_m.iter().map(|&p| frame.place(p)).collect();
-    // Nearest neighbours: distance and direction.
-    let mut nearest = Vec::with_capacity(n);
+    (frame, plane_rms_m)
+}
+
+/// Each point's nearest neighbour among `flat` (m): its distance, m, and direction, radians (infinite distance
+/// for a lone point). Pairwise: `O(n²)`, which [`MAX_LATTICE_POINTS`] bounds.
+pub fn nearest_neighbours(flat: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut nearest = Vec::with_capacity(flat.len());
     for (i, a) in flat.iter().enumerate() {
         let mut best = (f64::INFINITY, 0.0);
         for (j, b) in flat.iter().enumerate() {
@@ -199,6 +194,26 @@ pub fn fit(points_m: &[[f64; 3]]) -> Result<Lattice, String> {
         }
         nearest.push(best);
     }
+    nearest
+}
+
+/// The lattice the 3-D points `points_m` lie on, or why not.
+///
+/// # Errors
+/// A sentence: fewer than 2 points, more than [`MAX_LATTICE_POINTS`], a non-finite coordinate, points that do not
+/// lie on a lattice within [`LATTICE_TOLERANCE`] (with the worst point's distance), two on one node, a lattice of
+/// more than [`MAX_GRID_POINTS`].
+pub fn fit(points_m: &[[f64; 3]]) -> Result<Lattice, String> {
+    let n = points_m.len();
+    if !(2..=MAX_LATTICE_POINTS).contains(&n) {
+        return Err(format!("{n} points: a lattice is fitted to 2 to {MAX_LATTICE_POINTS}"));
+    }
+    if points_m.iter().flatten().any(|v| !v.is_finite()) {
+        return Err("a coordinate is not finite".into());
+    }
+    let (mut frame, plane_rms_m) = plane(points_m);
+    let flat: Vec<(f64, f64)> = points_m.iter().map(|&p| frame.place(p)).collect();
+    let nearest = nearest_neighbours(&flat);
     if nearest.iter().any(|&(d, _)| d <= 0.0) {
         return Err("two points are at one position".into());
     }

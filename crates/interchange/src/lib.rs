@@ -11,7 +11,8 @@
 //!   (point, actuator), and with [`ExportOptions`] its frequency response too).
 //! - [`import`](mod@import): what is read and what skipped, how the grid and keys, the actuators, the sample rate
 //!   (`metaplate_uff::sample_rate_from_step`), the function and the units are found, and what is refused.
-//! - [`lattice`]: 3-D node positions placed on the regular lattice of their plane.
+//! - [`lattice`]: 3-D node positions placed on the regular lattice of their plane, or in their plane alone
+//!   (scattered points, `metaplate_store::ScatteredPoints`).
 //! - [`IdLines`]: the ID lines of an exported record, the one format export and import share: they carry what an
 //!   import needs to rebuild the dataset exactly (key, grid, scene, row quality, source); a file without them
 //!   (another tool's) is placed by its nodes (`metaplate_core::grid::snap_to_grid`).

@@ -7,6 +7,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use metaplate_core::grid::{GridSpec, SNAP_TOLERANCE_M, snap_to_grid};
+use metaplate_store::ScatteredPoints;
 use metaplate_uff::{AxisCharacteristics, FunctionType, UffDecoder, UffRecord, Units164};
 
 use crate::error::{InterchangeError, refuse};
@@ -55,6 +56,8 @@ pub(crate) struct Seen {
     pub(crate) line: u64,
     pub(crate) function_type: FunctionType,
     pub(crate) response: i64,
+    /// The response direction (0 scalar, ±1..±6).
+    pub(crate) response_direction: i8,
     pub(crate) reference: (i64, i8),
     /// The metaplate key of ID line 1, if any.
     pub(crate) key: Option<(u32, u16)>,
@@ -188,6 +191,7 @@ pub(crate) fn survey(files: &[PathBuf], options: &ImportOptions) -> Result<Surve
                     line,
                     function_type: h.function_type,
                     response: h.response.node,
+                    response_direction: h.response.direction,
                     reference: (h.reference.node, h.reference.direction),
                     key: IdLines::parse_key(&h.id_lines[0]),
                     // Placeholders until dataset 164 is known (it may come after the responses).
@@ -240,8 +244,10 @@ pub(crate) struct Plan {
     pub(crate) actuators: Vec<ActuatorRef>,
     /// Node -> position in the grid's frame, m (the responses'; every node's with the metaplate grid).
     pub(crate) placed: HashMap<i64, (f64, f64)>,
-    /// The fitted lattice's frame, to place other nodes (the references) in it.
+    /// The fitted lattice's (or the scattered points' plane's) frame, to place other nodes (the references) in it.
     pub(crate) frame: Option<Frame>,
+    /// The points' positions when they lie on no lattice.
+    pub(crate) scattered: Option<ScatteredPoints>,
 }
 
 /// The grid, the actuators and each key's function: one per key, the time response, else the FRF.
@@ -252,8 +258,14 @@ pub(crate) fn plan(
     options: &ImportOptions,
     positions_m: &HashMap<i64, [f64; 3]>,
 ) -> Result<Plan, InterchangeError> {
-    let metaplate_grid = IdLines::parse_grid(&first_ids[1]).filter(|_| !options.grid_from_nodes);
-    let Placement { grid, keys, grid_from, actuators, placed, frame } = match metaplate_grid {
+    // Nodes off the plane z = const are an import's original positions exported again: placed again as on their
+    // first import (the ID lines' grid is in that import's frame, which the nodes are not).
+    let z: Vec<f64> = survey.functions.iter().filter_map(|s| positions_m.get(&s.response)).map(|p| p[2]).collect();
+    let flat = z.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b)) - z.iter().fold(f64::INFINITY, |a, &b| a.min(b))
+        <= SNAP_TOLERANCE_M
+        || z.is_empty();
+    let metaplate_grid = IdLines::parse_grid(&first_ids[1]).filter(|_| !options.grid_from_nodes && flat);
+    let Placement { grid, keys, grid_from, actuators, placed, frame, scattered } = match metaplate_grid {
         Some(grid) if survey.functions.iter().all(|s| s.key.is_some()) => {
             let keys: Vec<(u32, u16)> = survey.functions.iter().filter_map(|s| s.key).collect();
             let mut actuators = BTreeSet::new();
@@ -271,6 +283,7 @@ pub(crate) fn plan(
                 actuators: actuators.into_iter().collect(),
                 placed: positions_m.iter().map(|(&label, p)| (label, (p[0], p[1]))).collect(),
                 frame: None,
+                scattered: None,
             }
         }
         _ => keys_from_nodes(files, survey, positions_m)?,
@@ -300,7 +313,7 @@ pub(crate) fn plan(
         }
     }
     let by_at = chosen.iter().map(|(key, &i)| (survey.functions[i].at, *key)).collect();
-    Ok(Plan { grid, by_at, grid_from, actuators, placed, frame })
+    Ok(Plan { grid, by_at, grid_from, actuators, placed, frame, scattered })
 }
 
 /// The grid placed from the response nodes' positions (m), each function's key, and the actuators: the distinct
@@ -330,7 +343,7 @@ fn keys_from_nodes(
         labels.push(label);
         positions.push(*p);
     }
-    let (grid, indices, grid_from, placed, frame) = place(&positions)?;
+    let Placed { grid, indices, grid_from, in_plane: placed, frame, scattered } = place(&positions)?;
     let placed: HashMap<i64, (f64, f64)> = labels.iter().copied().zip(placed).collect();
     let point_of: HashMap<i64, u32> =
         labels.iter().zip(&indices).map(|(&label, &i)| (label, u32::try_from(i).unwrap_or(u32::MAX))).collect();
@@ -350,45 +363,119 @@ fn keys_from_nodes(
         .iter()
         .map(|s| (point_of.get(&s.response).copied().unwrap_or(0), actuator_of.get(&s.reference).copied().unwrap_or(0)))
         .collect();
-    Ok(Placement { grid, keys, grid_from, actuators, placed, frame })
+    Ok(Placement { grid, keys, grid_from, actuators, placed, frame, scattered })
 }
 
-/// The grid of the response points (m, 3-D), each point's flat index and in-grid position, where the grid came
-/// from, and the lattice's frame when the points were fitted in 3-D: one point; else points in a plane of constant
-/// z on an axis-aligned grid as they are ([`snap_to_grid`]); else the lattice of their plane
-/// ([`crate::lattice::fit`]).
-#[allow(clippy::type_complexity)] // One caller, which takes the tuple apart at once.
-fn place(
-    points: &[[f64; 3]],
-) -> Result<(GridSpec, Vec<usize>, String, Vec<(f64, f64)>, Option<Frame>), InterchangeError> {
+/// Where the response points go: the grid, each point's flat index in it and in-plane position (m), where the
+/// grid came from, the frame of a fit in 3-D, and the positions of points on no lattice.
+struct Placed {
+    grid: GridSpec,
+    indices: Vec<usize>,
+    grid_from: String,
+    in_plane: Vec<(f64, f64)>,
+    frame: Option<Frame>,
+    scattered: Option<ScatteredPoints>,
+}
+
+/// The grid of the response points (m, 3-D): one point; else points in a plane of constant z on an axis-aligned
+/// grid as they are ([`snap_to_grid`]); else the lattice of their plane ([`crate::lattice::fit`]); else scattered
+/// points ([`scattered`]).
+fn place(points: &[[f64; 3]]) -> Result<Placed, InterchangeError> {
     let flat: Vec<(f64, f64)> = points.iter().map(|p| (p[0], p[1])).collect();
     if points.windows(2).all(|w| w[0] == w[1]) {
         let (x, y) = flat.first().copied().unwrap_or_default();
         let grid = GridSpec { nx: 1, ny: 1, spacing_m: ONE_POINT_SPACING_M, origin_x_m: x, origin_y_m: y };
-        return Ok((grid, vec![0; points.len()], "one point".to_owned(), flat, None));
+        let (indices, grid_from) = (vec![0; points.len()], "one point".to_owned());
+        return Ok(Placed { grid, indices, grid_from, in_plane: flat, frame: None, scattered: None });
     }
     let z_range = points.iter().map(|p| p[2]).fold(f64::NEG_INFINITY, f64::max)
         - points.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
-    let snap_error = if z_range <= SNAP_TOLERANCE_M {
+    let in_xy = z_range <= SNAP_TOLERANCE_M;
+    let snap_error = if in_xy {
         match snap_to_grid(&flat) {
-            Ok((grid, indices)) => return Ok((grid, indices, "nodes".to_owned(), flat, None)),
+            Ok((grid, indices)) => {
+                let grid_from = "nodes".to_owned();
+                return Ok(Placed { grid, indices, grid_from, in_plane: flat, frame: None, scattered: None });
+            }
             Err(e) => e.to_string(),
         }
     } else {
         format!("they span {:.4} mm in z", z_range * 1e3)
     };
     match lattice::fit(points) {
-        Ok(lattice) => {
-            let grid_from = lattice.describe();
-            Ok((lattice.grid, lattice.indices, grid_from, lattice.in_plane_m, Some(lattice.frame)))
-        }
-        Err(why) => refuse!(
-            "the {} response nodes are not a grid as they are ({snap_error}) nor a regular lattice in their plane \
-             ({why}): scattered points are not imported yet (a dataset holds a lattice); a regular scan grid, or \
-             --nodes placing the points on one, is accepted",
-            points.len()
-        ),
+        Ok(lattice) => Ok(Placed {
+            grid_from: lattice.describe(),
+            grid: lattice.grid,
+            indices: lattice.indices,
+            in_plane: lattice.in_plane_m,
+            frame: Some(lattice.frame),
+            scattered: None,
+        }),
+        Err(why) => scattered(points, in_xy, &format!("not a grid as they are ({snap_error}) nor a lattice ({why})")),
     }
+}
+
+/// Points on no lattice (a scan mesh) kept where they are: in the plane z = const as given (`in_xy`), else in
+/// their least-squares plane ([`lattice::plane`]: through their centroid, u along the projection of x). Their grid
+/// is their index ([`metaplate_store::DatasetMeta::with_scattered`]), spaced by the median nearest-neighbour
+/// distance.
+///
+/// # Errors
+/// [`InterchangeError::Refused`] for more points than [`lattice::MAX_LATTICE_POINTS`] or two at one position in
+/// the plane (no analysis can tell them apart).
+fn scattered(points: &[[f64; 3]], in_xy: bool, not_lattice: &str) -> Result<Placed, InterchangeError> {
+    let n = points.len();
+    if n > lattice::MAX_LATTICE_POINTS {
+        refuse!(
+            "the {n} response nodes are {not_lattice}; scattered points are kept up to {} points",
+            lattice::MAX_LATTICE_POINTS
+        );
+    }
+    let (frame, plane_rms_m) = lattice::plane(points);
+    let in_plane: Vec<(f64, f64)> = if in_xy {
+        points.iter().map(|p| (p[0], p[1])).collect()
+    } else {
+        points.iter().map(|&p| frame.place(p)).collect()
+    };
+    let nearest = lattice::nearest_neighbours(&in_plane);
+    if let Some(i) = nearest.iter().position(|&(d, _)| d <= 0.0) {
+        refuse!(
+            "response nodes {i} and another of the {n} (in label order) lie at one position in their plane: \
+             distinct positions are accepted"
+        );
+    }
+    let mut distances: Vec<f64> = nearest.iter().map(|&(d, _)| d).collect();
+    distances.sort_unstable_by(f64::total_cmp);
+    let spacing_m = distances[n / 2];
+    let frame_text = if in_xy {
+        "the plane z = const of the nodes, x and y as given".to_owned()
+    } else {
+        let c = frame.centroid_m;
+        let [u, nn] = [frame.u, frame.normal].map(|a| a.map(|v| (v * 1e3).round() / 1e3 + 0.0));
+        format!(
+            "the nodes' least-squares plane (normal ({:.3}, {:.3}, {:.3}), points {:.3} µm rms off it): origin at \
+             their centroid ({:.6}, {:.6}, {:.6}) m, x along ({:.3}, {:.3}, {:.3})",
+            nn[0],
+            nn[1],
+            nn[2],
+            plane_rms_m * 1e6,
+            c[0],
+            c[1],
+            c[2],
+            u[0],
+            u[1],
+            u[2]
+        )
+    };
+    let grid_from = format!(
+        "scattered points: the {n} response nodes are {not_lattice}; kept at their positions in {frame_text}, \
+         {:.4} mm apart (median nearest neighbour)",
+        spacing_m * 1e3
+    );
+    let grid = GridSpec { nx: n, ny: 1, spacing_m, origin_x_m: 0.0, origin_y_m: 0.0 };
+    let scattered = ScatteredPoints { positions_m: in_plane.clone(), frame: frame_text };
+    let frame = (!in_xy).then_some(frame);
+    Ok(Placed { grid, indices: (0..n).collect(), grid_from, in_plane, frame, scattered: Some(scattered) })
 }
 
 /// Where the responses go: the grid, each function's key, where the grid came from, the actuators.
@@ -401,6 +488,8 @@ struct Placement {
     placed: HashMap<i64, (f64, f64)>,
     /// The fitted lattice's frame, if the points were fitted in 3-D.
     frame: Option<Frame>,
+    /// The points' positions when they lie on no lattice.
+    scattered: Option<ScatteredPoints>,
 }
 
 /// Node positions from a CSV file: a header naming the columns `node`, `x_m`, `y_m` and optionally `z_m` (in any

@@ -205,6 +205,14 @@ fn motion_responses_import_with_their_nodes_converted_to_velocity() {
     // 0 Hz has no velocity from an acceleration: zero but for the f32 rounding of the stored response.
     let peak = spectrum.iter().map(|c| c.norm()).fold(0.0, f64::max);
     assert!(spectrum[0].norm() <= 1e-5 * peak, "{} of {peak}", spectrum[0]);
+
+    // Each is one point: `analyze` says so by name.
+    for dir in ["catman", "dt9837", "accelerance"] {
+        let Err(e) = metaplate_analysis::dataset_report::analyse_dataset(&tmp.path().join(dir), None) else {
+            panic!("{dir}: one point analysed")
+        };
+        assert!(e.to_string().contains("it holds one point, at ("), "{dir}: {e}");
+    }
 }
 
 #[test]

@@ -7,3 +7,4 @@ mod foreign;
 mod pyuff_reads;
 mod refusals;
 mod round_trip;
+mod scattered;

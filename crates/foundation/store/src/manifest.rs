@@ -50,6 +50,20 @@ pub struct DatasetMeta {
     /// `config_hash` is unchanged).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub description: Option<DatasetDescription>,
+    /// Where the points are when they lie on no lattice (a scan mesh imported from another tool); `grid` is then an
+    /// index of them (`nx` points, `ny` 1) that says nothing of their positions. `None` for a dataset on its grid
+    /// (absent from its manifest, so its `config_hash` is unchanged).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scattered: Option<ScatteredPoints>,
+}
+
+/// Points on no lattice: each point's position in the plane of the points, by point index.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScatteredPoints {
+    /// Position (x, y) of point `i` (the grid's flat index), m, in the frame `frame` says.
+    pub positions_m: Vec<(f64, f64)>,
+    /// The frame of the positions, in words (for example the plane fitted to 3-D nodes, and its axes).
+    pub frame: String,
 }
 
 /// [`DatasetDescription::ir_unit`] of plate velocity per actuator force: the simulated ground truth, and imports.
@@ -85,6 +99,27 @@ impl DatasetMeta {
             seed,
             grid,
             description: None,
+            scattered: None,
+        }
+    }
+
+    /// This metadata of scattered points ([`DatasetMeta::scattered`]): the grid becomes their index,
+    /// `positions_m.len()` x 1, with `spacing_m` kept (a typical distance between the points, m).
+    #[must_use]
+    pub fn with_scattered(mut self, scattered: ScatteredPoints) -> Self {
+        let (origin_x_m, origin_y_m) = scattered.positions_m.first().copied().unwrap_or_default();
+        self.grid =
+            GridSpec { nx: scattered.positions_m.len(), ny: 1, spacing_m: self.grid.spacing_m, origin_x_m, origin_y_m };
+        self.scattered = Some(scattered);
+        self
+    }
+
+    /// Position of point `point_index`, m: its scattered position ([`DatasetMeta::scattered`]), else its node of
+    /// the grid; `None` beyond the points.
+    pub fn position_m(&self, point_index: usize) -> Option<(f64, f64)> {
+        match &self.scattered {
+            Some(s) => s.positions_m.get(point_index).copied(),
+            None => (point_index < self.grid.len()).then(|| self.grid.position_m(point_index)),
         }
     }
 
@@ -106,7 +141,22 @@ impl DatasetMeta {
         if self.recipe.trim().is_empty() {
             return Err(StoreError::InvalidMeta { field: "recipe", reason: "must not be empty".into() });
         }
-        self.grid.validate().map_err(|e| StoreError::InvalidMeta { field: "grid", reason: e.to_string() })
+        self.grid.validate().map_err(|e| StoreError::InvalidMeta { field: "grid", reason: e.to_string() })?;
+        if let Some(s) = &self.scattered {
+            let invalid = |reason: String| Err(StoreError::InvalidMeta { field: "scattered", reason });
+            if s.positions_m.len() != self.grid.len() || self.grid.ny != 1 {
+                return invalid(format!(
+                    "{} positions for a {} x {} grid; scattered points are indexed by a grid of one row, one node each",
+                    s.positions_m.len(),
+                    self.grid.nx,
+                    self.grid.ny
+                ));
+            }
+            if let Some(i) = s.positions_m.iter().position(|p| !(p.0.is_finite() && p.1.is_finite())) {
+                return invalid(format!("point {i}'s position is not finite"));
+            }
+        }
+        Ok(())
     }
 
     /// SHA-256 of the canonical JSON of this metadata (see [`canonical_json`]), as `"sha256:<hex>"`: equal metadata
@@ -283,6 +333,29 @@ mod tests {
             42,
             GridSpec::centred(49, 25, 0.005),
         )
+    }
+
+    #[test]
+    fn scattered_points_are_indexed_by_a_one_row_grid_and_absent_from_a_grid_datasets_manifest() {
+        let meta = sample_meta();
+        let json = serde_json::to_value(&meta).unwrap();
+        assert!(json.get("scattered").is_none(), "a dataset on its grid keeps its manifest and config_hash");
+        let positions_m = vec![(0.01, 0.02), (-0.03, 0.5), (0.2, -0.1)];
+        let frame = "the plane z = const".to_owned();
+        let scattered = meta.clone().with_scattered(ScatteredPoints { positions_m, frame });
+        scattered.validate().unwrap();
+        assert_eq!((scattered.grid.nx, scattered.grid.ny), (3, 1));
+        assert_eq!((scattered.position_m(1), scattered.position_m(3)), (Some((-0.03, 0.5)), None));
+        assert_eq!(meta.position_m(0), Some(meta.grid.position_m(0)));
+        assert_ne!(scattered.config_hash(), meta.config_hash());
+        let mut wrong = scattered.clone();
+        wrong.grid.nx = 4;
+        assert!(matches!(wrong.validate(), Err(StoreError::InvalidMeta { field: "scattered", .. })));
+        let mut nan = scattered;
+        if let Some(s) = nan.scattered.as_mut() {
+            s.positions_m[2].0 = f64::NAN;
+        }
+        assert!(matches!(nan.validate(), Err(StoreError::InvalidMeta { field: "scattered", .. })));
     }
 
     #[test]

@@ -104,6 +104,19 @@ pub fn rewrite(
     std::fs::write(to, out).unwrap();
 }
 
+/// The nodes of dataset 2411 in the universal file `path`: label -> position.
+pub fn decode_nodes(path: &Path) -> std::collections::HashMap<u32, [f64; 3]> {
+    let mut decoder = UffDecoder::new();
+    decoder.push(&std::fs::read(path).unwrap());
+    decoder.finish();
+    decoder
+        .records()
+        .filter_map(|r| if let Ok(UffRecord::Nodes(n)) = r { Some(n.nodes) } else { None })
+        .flatten()
+        .map(|n| (n.label, n.position_m))
+        .collect()
+}
+
 /// Asserts that `imported` holds `original`'s rows: keys, responses within `rel` of each response's peak, positions
 /// and quality exactly.
 pub fn assert_same(original: &Dataset, imported: &Dataset, rel: f64, what: &str) {

@@ -1,5 +1,5 @@
 """Prints, as JSON on stdout, what pyuff reads from a universal file: per dataset 58 its response and reference
-node and direction, abscissa step and values (complex as [re, im] pairs); per dataset 2411 its nodes.
+node and direction, ordinate data type, abscissa step and values (complex as [re, im] pairs); per dataset 2411 its nodes.
 
     read_uff_values.py FILE
 """
@@ -18,6 +18,7 @@ for s in pyuff.UFF(sys.argv[1]).read_sets():
         out["functions"].append({
             "func_type": int(s["func_type"]),
             "rsp_node": int(s["rsp_node"]), "ref_node": int(s["ref_node"]),
+            "rsp_dir": int(s["rsp_dir"]), "ref_dir": int(s["ref_dir"]),
             "ordinate_spec_data_type": int(s["ordinate_spec_data_type"]),
             "abscissa_inc": float(s["abscissa_inc"]),
             "values": values,

@@ -93,16 +93,21 @@ fn mean(values: impl ExactSizeIterator<Item = f64>) -> f64 {
     values.sum::<f64>() / n
 }
 
-/// Rows of `g` (positions into `g.points()`) whose grid position lies in the square of edge `edge_m` centred on
-/// `centre_m`: within `edge_m / 2` of the centre along x and along y (a micrometre of slack, so that points exactly
-/// on the edge count whatever the rounding).
-pub fn domain_rows(g: &PropagationMatrices, grid: &GridSpec, edge_m: f64, centre_m: (f64, f64)) -> Vec<usize> {
+/// Rows of `g` (positions into `g.points()`) whose position (`position_m` of the point's index, m) lies in the
+/// square of edge `edge_m` centred on `centre_m`: within `edge_m / 2` of the centre along x and along y (a
+/// micrometre of slack, so that points exactly on the edge count whatever the rounding).
+pub fn domain_rows(
+    g: &PropagationMatrices,
+    position_m: &dyn Fn(u32) -> (f64, f64),
+    edge_m: f64,
+    centre_m: (f64, f64),
+) -> Vec<usize> {
     let half = edge_m / 2.0 + 1e-6;
     g.points()
         .iter()
         .enumerate()
         .filter(|(_, p)| {
-            let (x, y) = grid.position_m(**p as usize);
+            let (x, y) = position_m(**p);
             (x - centre_m.0).abs() <= half && (y - centre_m.1).abs() <= half
         })
         .map(|(row, _)| row)
@@ -125,6 +130,20 @@ pub fn domain_authority(
     edge_m: f64,
     opts: &AuthorityOptions,
 ) -> Result<DomainAuthority, AnalysisError> {
+    domain_authority_at(g, &|p| grid.position_m(p as usize), edge_m, opts)
+}
+
+/// [`domain_authority`] with each point's position given by `position_m` (point index -> m): scattered points
+/// (`crate::scattered`) select their domain by where they are.
+///
+/// # Errors
+/// As [`domain_authority`].
+pub fn domain_authority_at(
+    g: &PropagationMatrices,
+    position_m: &dyn Fn(u32) -> (f64, f64),
+    edge_m: f64,
+    opts: &AuthorityOptions,
+) -> Result<DomainAuthority, AnalysisError> {
     if !(edge_m.is_finite() && edge_m > 0.0) {
         return Err(AnalysisError::InvalidParameter {
             name: "edge_m",
@@ -138,7 +157,7 @@ pub fn domain_authority(
         });
     }
     let bins = bins_in_band(g, opts.band_hz)?;
-    let rows = domain_rows(g, grid, edge_m, opts.centre_m);
+    let rows = domain_rows(g, position_m, edge_m, opts.centre_m);
     let n_act = g.n_actuators();
     if rows.len() < n_act {
         return Err(AnalysisError::TooFewPoints { measured: rows.len(), required: n_act });

@@ -15,6 +15,7 @@ use serde::Serialize;
 use crate::error::{AnalysisError, chain};
 use crate::pixel::{PixelAreaMap, PixelAreaOptions, pixel_area_map};
 use crate::report::{PlateReport, ReportOptions, analyse};
+use crate::scattered::{ScatteredSummary, analyse_scattered};
 
 /// Band of the propagation matrices, Hz: the refresh pulse's skirts (50 Hz) up to the wavelength's 600 Hz.
 pub const DATASET_G_BAND_HZ: (f64, f64) = (50.0, 625.0);
@@ -66,6 +67,10 @@ pub struct DatasetAnalysis {
     pub wavelength: Vec<WavelengthRow>,
     /// The wavelengths the lattice resolves.
     pub wavelength_resolvable: ResolvableSummary,
+    /// For scattered points (an imported scan mesh): which analyses ran on the points and which on a lattice
+    /// interpolated within their hull (absent for a dataset on its grid).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scattered: Option<ScatteredSummary>,
 }
 
 /// The mean driven response at one frequency.
@@ -177,6 +182,17 @@ pub fn analyse_dataset(
     let dataset =
         Dataset::open(data).map_err(|e| AnalysisError::Dataset { path: data.to_path_buf(), reason: chain(&e) })?;
     let grid = dataset.manifest().meta.grid;
+    if let [point] = dataset.points() {
+        let (x, y) = dataset.manifest().meta.position_m(*point as usize).unwrap_or_default();
+        return Err(AnalysisError::Step {
+            step: "analysing the dataset",
+            reason: format!(
+                "it holds one point, at ({x}, {y}) m: every analysis of a wave field (wavelength, pixel area, POD, \
+                 authority, refresh, driven response) compares points, so none runs on one; at least 2 points are \
+                 needed (3 not on one line for the wavelength and the pixel area)"
+            ),
+        });
+    }
     let selection = max_error_db
         .map(|db| PointSelection::by_estimated_error(&dataset, db))
         .transpose()
@@ -184,20 +200,38 @@ pub fn analyse_dataset(
     let kept = selection.as_ref().map(|s| s.kept.as_slice());
     let g = PropagationMatrices::from_dataset(&dataset, DATASET_G_BAND_HZ, kept)
         .map_err(|e| AnalysisError::Step { step: "building G(omega)", reason: chain(&e) })?;
-    let report = analyse(&g, &grid, &ReportOptions::default())?;
-    let mut mask = vec![false; grid.len()];
-    for &p in g.points() {
-        if let Some(m) = mask.get_mut(p as usize) {
-            *m = true;
+    let meta = &dataset.manifest().meta;
+    let (report, pixels, scattered, g) = match &meta.scattered {
+        Some(_) => {
+            let positions: Vec<(f64, f64)> =
+                g.points().iter().map(|&p| meta.position_m(p as usize).unwrap_or((f64::NAN, f64::NAN))).collect();
+            let (report, pixels, summary, on_lattice) = analyse_scattered(&g, &positions, &ReportOptions::default())?;
+            (report, pixels, Some(summary), on_lattice)
         }
-    }
-    let pixels = pixel_area_map(&g, &grid, &mask, &PixelAreaOptions::default());
+        None => {
+            let report = analyse(&g, &grid, &ReportOptions::default())?;
+            let mut mask = vec![false; grid.len()];
+            for &p in g.points() {
+                if let Some(m) = mask.get_mut(p as usize) {
+                    *m = true;
+                }
+            }
+            let pixels = pixel_area_map(&g, &grid, &mask, &PixelAreaOptions::default());
+            (report, pixels, None, g)
+        }
+    };
     let scene_id = &dataset.manifest().meta.scene;
     let scene = Scene::builtin(&scene_id.name).ok().filter(|s| s.id().hash == scene_id.hash);
     let mut analysis = summarise(&report, pixels.as_ref(), scene.as_ref());
+    if let Some(summary) = &scattered
+        && report.wavelength.is_empty()
+    {
+        analysis.errors.insert("wavelength".into(), summary.lattice_analyses.clone());
+    }
+    analysis.points = scattered.as_ref().map_or(g.n_points(), |s| s.points);
+    analysis.scattered = scattered;
     analysis.dataset = data.display().to_string();
     analysis.scene.clone_from(&scene_id.name);
-    analysis.points = g.n_points();
     analysis.actuators = g.n_actuators();
     analysis.excluded_points = selection.map(|s| ExcludedPoints {
         excluded: s
@@ -311,6 +345,7 @@ fn summarise(
             nyquist_k_rad_m: range.nyquist_k_rad_m,
             shortest_m: range.shortest_wavelength_m,
         },
+        scattered: None,
     }
 }
 
@@ -354,6 +389,10 @@ impl DatasetAnalysis {
             cm(finite(r.shortest_m)),
             cm(finite(r.longest_m)),
         ));
+        if let Some(s) = &self.scattered {
+            line(format!("scattered points ({}): {}", s.points, s.on_points));
+            line(format!("  {}", s.lattice_analyses));
+        }
         line(format!("median pixel area (cm^2)   {}", show(self.median_pixel_area_cm2)));
         line(format!("POD components (99 %)      {}", json_text(self.pod_components_99.map(|n| n.to_string()))));
         for key in DOMAIN_EDGE_KEYS {

@@ -62,6 +62,13 @@ pub enum AnalysisError {
         /// What was found.
         reason: String,
     },
+    /// The analysis needs a lattice (a k-space transform, pixel contours) and the points give none: scattered
+    /// points that span no area to interpolate over (see [`crate::scattered`]).
+    #[error("needs a lattice, and these points give none: {reason}")]
+    NeedsLattice {
+        /// Why no lattice (the points, their number).
+        reason: String,
+    },
     /// A size would need more memory than the routine allows.
     #[error("{what} needs {len} elements, more than the limit of {max}")]
     TooLarge {

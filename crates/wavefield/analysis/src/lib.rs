@@ -20,6 +20,9 @@
 //! - [`lattice`]: the regular lattice a (subset of) measured points lies on, on which every lattice-dependent
 //!   analysis works, and the range of wavelengths it can resolve (below).
 //! - [`report`]: all of them on one plate, from its propagation matrices.
+//! - [`scattered`]: points on no lattice (an imported scan mesh): which analyses run on the points, and the linear
+//!   interpolation on their Delaunay triangulation onto a lattice within their hull for the k-space wavelength and
+//!   the pixel area.
 //! - [`dataset_report`]: the whole analysis of a dataset on disk as `metaplate analyze` prints it (a typed,
 //!   serialisable report), with its figures ([`dataset_figures`], one plate's, or both built-in plates' on shared
 //!   axes); [`paper_table`]: the paper-against-suite table from typed results.
@@ -74,6 +77,7 @@ pub mod pod;
 pub mod refresh;
 pub mod report;
 pub mod response;
+pub mod scattered;
 pub mod wavelength;
 
 pub use error::AnalysisError;

@@ -107,6 +107,26 @@ pub enum ControlError {
         /// The measured lattice's step along x and y, mm.
         step_mm: (f64, f64),
     },
+    /// A pixel on scattered points (an imported scan mesh) lies farther from the nearest point than that point's
+    /// own cell reaches: outside the points or in a gap between them.
+    #[error(
+        "pixel ({x_m}, {y_m}) is {distance_mm:.1} mm from the nearest measured point ({:.4}, {:.4}), more than \
+         {limit_mm:.1} mm (0.71 of that point's distance to its nearest neighbour, the corner of its cell on a square \
+         mesh): it lies outside the scattered points or in a gap between them",
+        nearest_m.0, nearest_m.1
+    )]
+    PixelOffPoints {
+        /// x in the points' plane, m.
+        x_m: f64,
+        /// y in the points' plane, m.
+        y_m: f64,
+        /// Distance to the nearest measured point, mm.
+        distance_mm: f64,
+        /// The nearest measured point, m.
+        nearest_m: (f64, f64),
+        /// The largest distance accepted there, mm.
+        limit_mm: f64,
+    },
     /// The point a pixel snaps to was excluded for its Green's functions' estimated error
     /// ([`crate::pixels::PointSelection`]).
     #[error(

@@ -6,6 +6,11 @@
 //! measured point, and is refused when that point is more than half the measured lattice's step away along either
 //! axis (a gap of the scan: a support, a masked point, or outside the measured points' hull).
 //!
+//! Scattered points (`metaplate_store::ScatteredPoints`, an imported scan mesh) have no outline and no lattice: a
+//! pixel snaps to the nearest point (by their positions in the points' plane), refused when farther than
+//! [`SCATTERED_REACH`] of that point's distance to its own nearest neighbour (the corner of its cell on a square
+//! mesh; `√3/3` on a triangular one, which it covers).
+//!
 //! [`PointSelection`] leaves out the points whose Green's functions are estimated too inaccurate (each row's
 //! `estimated_error_db`, from the spread of its repetitions): `analyze` and `focus` use only the points it keeps.
 
@@ -15,13 +20,19 @@ use metaplate_store::Dataset;
 
 use crate::error::ControlError;
 
+/// How far from a scattered point a pixel snaps to it, in that point's nearest-neighbour distances: `√2/2`.
+pub const SCATTERED_REACH: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
 /// The plate's outline test of `dataset`, as the module documentation says: `(x_m, y_m) -> on the plate`.
 pub fn on_plate(dataset: &Dataset) -> impl Fn(f64, f64) -> bool + use<> {
     let meta = &dataset.manifest().meta;
     let scene = Scene::builtin(&meta.scene.name).ok().filter(|s| s.id() == meta.scene);
     let grid = meta.grid;
+    let scattered = meta.scattered.is_some();
     move |x_m, y_m| match &scene {
         Some(scene) => scene.plate.outline.contains(x_m, y_m),
+        // No outline: the distance to the points decides (`snap_pixel`).
+        None if scattered => true,
         None => {
             let h = grid.spacing_m / 2.0;
             let (x1, y1) = grid.position_m(grid.index(grid.nx - 1, grid.ny - 1));
@@ -45,8 +56,8 @@ fn lattice_step_m(coords: impl Iterator<Item = f64>, grid: &GridSpec) -> f64 {
 ///
 /// # Errors
 /// [`ControlError::PixelOffPlate`] outside the outline (or non-finite coordinates), [`ControlError::PixelInGap`]
-/// farther than half the measured step from the nearest measured point, [`ControlError::Empty`] for a dataset
-/// without points.
+/// farther than half the measured step from the nearest measured point ([`ControlError::PixelOffPoints`] beyond
+/// a scattered point's reach), [`ControlError::Empty`] for a dataset without points.
 pub fn snap_pixel(
     dataset: &Dataset,
     x_m: f64,
@@ -56,9 +67,13 @@ pub fn snap_pixel(
     if !(x_m.is_finite() && y_m.is_finite() && on_plate(x_m, y_m)) {
         return Err(ControlError::PixelOffPlate { x_m, y_m });
     }
-    let grid = dataset.manifest().meta.grid;
+    let meta = &dataset.manifest().meta;
+    let grid = meta.grid;
     let positions: Vec<(u32, (f64, f64))> =
-        dataset.points().iter().map(|&p| (p, grid.position_m(p as usize))).collect();
+        dataset.points().iter().map(|&p| (p, meta.position_m(p as usize).unwrap_or((f64::NAN, f64::NAN)))).collect();
+    if meta.scattered.is_some() {
+        return snap_scattered(&positions, (x_m, y_m));
+    }
     let step_x = lattice_step_m(positions.iter().map(|p| p.1.0), &grid);
     let step_y = lattice_step_m(positions.iter().map(|p| p.1.1), &grid);
     let at = (x_m, y_m);
@@ -74,6 +89,29 @@ pub fn snap_pixel(
             distance_mm: dist2((px, py), at).sqrt() * 1e3,
             nearest_m: (px, py),
             step_mm: (step_x * 1e3, step_y * 1e3),
+        });
+    }
+    Ok(point)
+}
+
+/// The scattered point of `positions` (index, position, m) a pixel at `at` snaps to (see the module documentation).
+fn snap_scattered(positions: &[(u32, (f64, f64))], at: (f64, f64)) -> Result<u32, ControlError> {
+    let nearest_to = |q: (f64, f64), skip: Option<u32>| {
+        positions.iter().filter(|p| Some(p.0) != skip).min_by(|a, b| dist2(a.1, q).total_cmp(&dist2(b.1, q))).copied()
+    };
+    let Some((point, p)) = nearest_to(at, None) else {
+        return Err(ControlError::Empty { input: "the dataset's measured points" });
+    };
+    // A lone point reaches as far as nothing measures: only the pixel on it.
+    let reach_m = nearest_to(p, Some(point)).map_or(0.0, |(_, q)| dist2(p, q).sqrt() * SCATTERED_REACH);
+    let distance_m = dist2(p, at).sqrt();
+    if distance_m > reach_m * (1.0 + 1e-9) + 1e-12 {
+        return Err(ControlError::PixelOffPoints {
+            x_m: at.0,
+            y_m: at.1,
+            distance_mm: distance_m * 1e3,
+            nearest_m: p,
+            limit_mm: reach_m * 1e3,
         });
     }
     Ok(point)
