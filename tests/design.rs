@@ -88,3 +88,133 @@ fn design_file_mistake_names_file_line_and_key() {
     assert!(stderr.contains(&format!("{}:3:", path.display())) && stderr.contains("thickness_m"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A coarse search file (bookkeeping, not physics: a coarse mesh, `wave_vectors` wave vectors) of `heights` x 2
+/// designs.
+fn coarse_search(dir: &std::path::Path, heights: usize, wave_vectors: usize) -> PathBuf {
+    let path = dir.join("search.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "base = \"paper\"\n[vary]\nrod_height_m = {{ from = 0.02, to = 0.04, count = {heights} }}\n\
+             rod_material = [\"brass\", \"aluminium\"]\n[objectives]\nmax_phase_velocity_m_s = 10.0\n\
+             over_hz = [75.0, 400.0]\nminimise = [\"added_mass_kg_m2\", \"rod_height_m\"]\n[band]\nwave_vectors = {wave_vectors}\n\
+             modes = 1\nper_side = 1\nradial = 1\nrod_elements = 2\n"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+/// The indices of the designs a `design search --json` run computed, from its events.
+fn computed_indices(stdout: &[u8]) -> Vec<u64> {
+    String::from_utf8_lossy(stdout)
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .map(|v| v["result"]["candidate"]["index"].as_u64().unwrap())
+        .collect()
+}
+
+#[test]
+fn four_shards_as_separate_processes_merge_to_one_runs_results() {
+    let dir = scratch("shards");
+    let search = coarse_search(&dir, 4, 7);
+    let whole = dir.join("whole");
+    let out = metaplate(&["design", "search", search.to_str().unwrap(), "--out", whole.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("of 8 designs feasible; the trade-off front:"), "{text}");
+    let shards: Vec<PathBuf> = (0..4).map(|i| dir.join(format!("shard{i}"))).collect();
+    let children: Vec<_> = shards
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            Command::new(env!("CARGO_BIN_EXE_metaplate"))
+                .args(["design", "search", search.to_str().unwrap(), "--out", d.to_str().unwrap()])
+                .args(["--shard", &format!("{i}/4"), "--json"])
+                .stdout(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for (i, child) in children.into_iter().enumerate() {
+        let out = child.wait_with_output().unwrap();
+        assert!(out.status.success());
+        assert_eq!(computed_indices(&out.stdout), vec![i as u64, i as u64 + 4]);
+    }
+    let merged = dir.join("merged.parquet");
+    let mut args = vec!["design", "merge", search.to_str().unwrap()];
+    args.extend(shards.iter().map(|d| d.to_str().unwrap()));
+    args.extend(["--out", merged.to_str().unwrap()]);
+    let out = metaplate(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::read(&merged).unwrap(), std::fs::read(whole.join("results.parquet")).unwrap());
+    // A missing shard is named, and nothing is written.
+    let partial = dir.join("partial.parquet");
+    let out = metaplate(&[
+        "design",
+        "merge",
+        search.to_str().unwrap(),
+        shards[0].to_str().unwrap(),
+        "--out",
+        partial.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success() && !partial.exists());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("6 of 8 designs are missing"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Killed with SIGKILL once some designs are written, then run again: the second run computes exactly the designs
+/// the first had not written (none lost, none computed twice), and the results equal an uninterrupted run's.
+#[test]
+fn a_search_killed_with_sigkill_resumes_without_repeating_or_losing_a_design() {
+    let dir = scratch("kill");
+    // Enough wave vectors that a design takes tens of milliseconds: the kill lands mid-run.
+    let search = coarse_search(&dir, 8, 60);
+    let reference = dir.join("reference");
+    let out = metaplate(&["design", "search", search.to_str().unwrap(), "--out", reference.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let run = dir.join("run");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["design", "search", search.to_str().unwrap(), "--out", run.to_str().unwrap(), "--json"])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let parts = |d: &std::path::Path| -> Vec<u64> {
+        let mut v: Vec<u64> = std::fs::read_dir(d.join("parts"))
+            .map(|e| {
+                e.filter_map(|e| {
+                    e.ok()?.file_name().to_str()?.strip_prefix("design-")?.strip_suffix(".parquet")?.parse().ok()
+                })
+                .collect()
+            })
+            .unwrap_or_default();
+        v.sort_unstable();
+        v
+    };
+    let start = std::time::Instant::now();
+    while parts(&run).len() < 3 && start.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let before = parts(&run);
+    assert!(before.len() >= 3 && before.len() < 16, "{before:?}: kill earlier");
+    let out = metaplate(&["design", "search", search.to_str().unwrap(), "--out", run.to_str().unwrap(), "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut all = before.clone();
+    let again = computed_indices(&out.stdout);
+    assert!(again.iter().all(|i| !before.contains(i)), "computed twice: {again:?} after {before:?}");
+    all.extend(again);
+    all.sort_unstable();
+    assert_eq!(all, (0..16).collect::<Vec<u64>>());
+    assert_eq!(
+        std::fs::read(run.join("results.parquet")).unwrap(),
+        std::fs::read(reference.join("results.parquet")).unwrap()
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,14 +1,11 @@
 //! `metaplate design ...`: a metamaterial unit cell's band structure (`metaplate_design`).
 
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::path::PathBuf;
 
 use anyhow::Context;
-use arrow_array::{ArrayRef, Float64Array, RecordBatch, UInt32Array};
-use arrow_schema::{DataType, Field, Schema};
 use clap::{Args, Subcommand};
-use metaplate_design::{BandDiagram, BandOptions, Design, MeshOptions, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
-use metaplate_figures::{BandFigure, Curve};
+use metaplate_design::search::{self, DesignResult, SearchSpec, Shard};
+use metaplate_design::{BandOptions, Design, MeshOptions, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
 
 /// Subcommands of `metaplate design`.
 #[derive(Subcommand)]
@@ -18,6 +15,44 @@ pub enum DesignCommand {
     /// homogeneous plate's A0. A table, or JSON with --json; Parquet points with --parquet; the paper's Fig. 2B-D
     /// with --figures.
     Band(BandArgs),
+    /// Computes a grid of designs (a search file: the base design, values of the rod's height and diameter, the
+    /// lattice constant, the plate's thickness, materials) against objectives (the first branch's phase velocity
+    /// under a limit over a band; goals to minimise), each written to OUT/parts as it finishes, then
+    /// OUT/results.parquet with the feasible designs and the trade-off front. Killed at any moment, the same
+    /// command resumes. `--shard I/N` computes the I-th of N parts (0-based: a Slurm array task id or a Kubernetes
+    /// job completion index); `design merge` gathers them.
+    Search(SearchArgs),
+    /// Gathers the parts of a search's shards into one results file, equal to an unsharded run's.
+    Merge(MergeArgs),
+}
+
+/// Arguments of `metaplate design search`.
+#[derive(Args)]
+pub struct SearchArgs {
+    /// The search file (TOML; docs/design.md).
+    search: PathBuf,
+    /// Folder of the results (made when missing; a folder of the same search resumes).
+    #[arg(long)]
+    out: PathBuf,
+    /// Compute only the designs whose index is I modulo N (0 <= I < N).
+    #[arg(long, default_value = "0/1")]
+    shard: String,
+    /// Print one JSON object per finished design on stdout instead of the bar and the front.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Arguments of `metaplate design merge`.
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The search file the shards ran.
+    search: PathBuf,
+    /// The shards' output folders.
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// The gathered results file (Parquet).
+    #[arg(long)]
+    out: PathBuf,
 }
 
 /// Arguments of `metaplate design band`.
@@ -58,6 +93,13 @@ pub struct BandArgs {
 pub fn run(command: &DesignCommand) -> anyhow::Result<()> {
     match command {
         DesignCommand::Band(args) => band(args),
+        DesignCommand::Search(args) => search(args),
+        DesignCommand::Merge(args) => {
+            let spec = SearchSpec::load(&args.search)?;
+            let results = search::merge(&spec, &args.dirs, &args.out)?;
+            print_front(&results);
+            Ok(())
+        }
     }
 }
 
@@ -71,11 +113,11 @@ fn band(args: &BandArgs) -> anyhow::Result<()> {
     };
     let band = band_diagram(&design, &options, &args.wavelength_at_hz)?;
     if let Some(path) = &args.parquet {
-        write_parquet(path, &band).with_context(|| format!("writing {}", path.display()))?;
+        metaplate_design::write_parquet(path, &band).with_context(|| format!("writing {}", path.display()))?;
     }
     if let Some(dir) = &args.figures {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        metaplate_figures::band_structure(dir, "band_structure", &figure(&design, &band))?;
+        metaplate_figures::band_structure(dir, "band_structure", &metaplate_design::band_figure(&design, &band))?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&band)?);
@@ -85,137 +127,70 @@ fn band(args: &BandArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One row per branch point: mode, path index and position, wave vector, frequency, phase velocity, wavelength,
-/// plate energy share (null phase velocity and wavelength at Gamma).
-fn write_parquet(path: &Path, band: &BandDiagram) -> anyhow::Result<()> {
-    let points = || band.branches.iter().flat_map(|b| b.points.iter().map(move |p| (b.mode, p)));
-    let f64s = |f: &dyn Fn(&metaplate_design::BranchPoint) -> f64| -> ArrayRef {
-        Arc::new(Float64Array::from(points().map(|(_, p)| f(p)).collect::<Vec<_>>()))
-    };
-    let optional = |f: &dyn Fn(&metaplate_design::BranchPoint) -> Option<f64>| -> ArrayRef {
-        Arc::new(Float64Array::from(points().map(|(_, p)| f(p)).collect::<Vec<_>>()))
-    };
-    let u32s = |v: Vec<usize>| -> anyhow::Result<ArrayRef> {
-        let v: Result<Vec<u32>, _> = v.into_iter().map(u32::try_from).collect();
-        Ok(Arc::new(UInt32Array::from(v?)))
-    };
-    let position = |i: usize| band.path.get(i).map_or(f64::NAN, |p| p.path_position);
-    let schema = Arc::new(Schema::new(vec![
-        Field::new("mode", DataType::UInt32, false),
-        Field::new("path_index", DataType::UInt32, false),
-        Field::new("path_position", DataType::Float64, false),
-        Field::new("kx_rad_m", DataType::Float64, false),
-        Field::new("ky_rad_m", DataType::Float64, false),
-        Field::new("freq_hz", DataType::Float64, false),
-        Field::new("phase_velocity_m_s", DataType::Float64, true),
-        Field::new("wavelength_m", DataType::Float64, true),
-        Field::new("plate_energy_share", DataType::Float64, false),
-    ]));
-    let columns = vec![
-        u32s(points().map(|(m, _)| m).collect())?,
-        u32s(points().map(|(_, p)| p.path_index).collect())?,
-        f64s(&|p| position(p.path_index)),
-        f64s(&|p| p.kx_rad_m),
-        f64s(&|p| p.ky_rad_m),
-        f64s(&|p| p.freq_hz),
-        optional(&|p| p.phase_velocity_m_s),
-        optional(&|p| p.wavelength_m),
-        f64s(&|p| p.plate_energy_share),
-    ];
-    let batch = RecordBatch::try_new(schema.clone(), columns)?;
-    let props = parquet::file::properties::WriterProperties::builder()
-        .set_compression(parquet::basic::Compression::SNAPPY)
-        .set_key_value_metadata(Some(vec![parquet::file::metadata::KeyValue::new(
-            "metaplate.design".to_owned(),
-            band.design.clone(),
-        )]))
-        .build();
-    let mut bytes = Vec::new();
-    let mut writer = parquet::arrow::ArrowWriter::try_new(&mut bytes, schema, Some(props))?;
-    writer.write(&batch)?;
-    writer.close()?;
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str()).context("the Parquet path names no file")?;
-    metaplate_store::write_bytes(dir, name, &bytes)?;
+fn search(args: &SearchArgs) -> anyhow::Result<()> {
+    let spec = SearchSpec::load(&args.search)?;
+    let shard = Shard::parse(&args.shard)?;
+    let mut bar = None;
+    let outcome = search::run(
+        &spec,
+        &args.out,
+        shard,
+        &mut |p| {
+            if args.json {
+                if let Some(last) = &p.last {
+                    println!(
+                        "{}",
+                        serde_json::json!({"event": "design", "done": p.done, "total": p.total, "result": last})
+                    );
+                }
+                return;
+            }
+            let bar = bar.get_or_insert_with(|| {
+                if p.resumed > 0 {
+                    eprintln!("resuming: {} of {} designs already computed", p.resumed, p.total);
+                }
+                crate::progress::bar(p.total as u64, "designs")
+            });
+            bar.set_position(p.done as u64);
+        },
+        &|| false,
+    )?;
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    for path in &outcome.recomputed {
+        eprintln!("{} could not be read and was computed again", path.display());
+    }
+    match &outcome.results {
+        Some(results) if !args.json => print_front(results),
+        Some(_) => {}
+        None => eprintln!(
+            "shard {}: {} designs computed; gather the shards with `metaplate design merge`",
+            args.shard,
+            outcome.computed.len()
+        ),
+    }
     Ok(())
 }
 
-/// The paper's Fig. 2B-D: the first five branches with the folded A0 and f_n, up to 1.5 times the top of m = 2 (the
-/// slow branch and its partner stay legible; the rod's higher modes are kHz above); c(f) and lambda(f) of m = 1, 2
-/// with the analytic A0's.
-fn figure(design: &Design, band: &BandDiagram) -> BandFigure {
-    let position = |i: usize| band.path[i].path_position;
-    let f_max = band.branches.iter().take(2).flat_map(|b| b.points.iter().map(|p| p.freq_hz)).fold(0.0, f64::max);
-    let clip_hz = 1.5 * f_max;
-    // Curves broken where they leave the plot, so that no line joins across the gap (the figure labels the first).
-    let clipped = |label: &str, values: &mut dyn Iterator<Item = (f64, f64)>| -> Vec<Curve> {
-        let mut out: Vec<Curve> = Vec::new();
-        let mut open = false;
-        for (x, f) in values {
-            if f <= clip_hz {
-                if !open {
-                    out.push(Curve { label: label.to_owned(), points: Vec::new() });
-                    open = true;
-                }
-                if let Some(c) = out.last_mut() {
-                    c.points.push((x, f));
-                }
-            } else {
-                open = false;
-            }
-        }
-        out
-    };
-    let branches: Vec<Curve> = band.branches[..band.branches.len().min(5)]
-        .iter()
-        .map(|b| Curve {
-            label: format!("m = {}", b.mode),
-            points: b
-                .points
-                .iter()
-                .filter(|p| p.freq_hz <= clip_hz)
-                .map(|p| (position(p.path_index), p.freq_hz))
-                .collect(),
-        })
-        .filter(|c| !c.points.is_empty())
-        .collect();
-    let a0_folded = band
-        .a0_folded_hz
-        .iter()
-        .flat_map(|f| {
-            clipped("A0, homogeneous plate (folded)", &mut f.iter().enumerate().map(|(i, &f)| (position(i), f)))
-        })
-        .collect();
-    let per_branch = |value: &dyn Fn(&metaplate_design::BranchPoint) -> Option<f64>| -> Vec<Curve> {
-        band.branches
-            .iter()
-            .take(2)
-            .map(|b| Curve {
-                label: format!("m = {}", b.mode),
-                points: b.points.iter().filter_map(|p| value(p).map(|v| (p.freq_hz, v))).collect(),
-            })
-            .collect()
-    };
-    let plate = design.plate;
-    let a0_at = |f_hz: f64| {
-        let k = plate.a0_wavenumber_rad_m(f_hz);
-        (2.0 * std::f64::consts::PI * f_hz / k, 2.0 * std::f64::consts::PI / k)
-    };
-    let freqs: Vec<f64> = (1..=100).map(|i| f_max * f64::from(i) / 100.0).collect();
-    BandFigure {
-        title: format!("Band structure of the {} unit cell (up to {clip_hz:.0} Hz)", band.design),
-        branches,
-        a0_folded,
-        resonator_hz: band.resonator_mode_hz,
-        phase_velocity: per_branch(&|p| p.phase_velocity_m_s),
-        wavelength: per_branch(&|p| p.wavelength_m),
-        a0_phase_velocity: Some(Curve {
-            label: "A0, homogeneous plate (analytic)".into(),
-            points: freqs.iter().map(|&f| (f, a0_at(f).0)).collect(),
-        }),
-        a0_wavelength: Some(Curve {
-            label: "A0, homogeneous plate (analytic)".into(),
-            points: freqs.iter().map(|&f| (f, a0_at(f).1)).collect(),
-        }),
+/// The count of feasible designs and the trade-off front, one line each.
+fn print_front(results: &[DesignResult]) {
+    let feasible = results.iter().filter(|r| r.feasible).count();
+    println!("{feasible} of {} designs feasible; the trade-off front:", results.len());
+    for r in results.iter().filter(|r| r.on_front) {
+        let c = &r.candidate;
+        println!(
+            "  #{}: rod {:.2} x {:.3} mm {}, a {:.1} mm, plate {:.2} mm {}: {:.2} kg/m^2 added, c <= {:.2} m/s, top {:.0} Hz",
+            c.index,
+            c.rod_height_m * 1e3,
+            c.rod_diameter_m * 1e3,
+            c.rod_material,
+            c.lattice_constant_m * 1e3,
+            c.plate_thickness_m * 1e3,
+            c.plate_material,
+            r.added_mass_kg_m2,
+            r.max_phase_velocity_m_s,
+            r.top_hz
+        );
     }
 }

@@ -73,17 +73,7 @@ pub fn write_parquet(path: &Path, sessions: &[SessionRecord]) -> Result<(), Expe
         Arc::new(StringArray::from(drive_hash)),
     ];
     let failed = |e: &dyn std::fmt::Display| ExperimentError::Output(format!("writing {}: {e}", path.display()));
-    let batch = RecordBatch::try_new(schema.clone(), columns).map_err(|e| failed(&e))?;
-    let props = parquet::file::properties::WriterProperties::builder()
-        .set_compression(parquet::basic::Compression::SNAPPY)
-        .set_key_value_metadata(Some(vec![parquet::file::metadata::KeyValue::new(
-            "metaplate.experiment".to_owned(),
-            experiment,
-        )]))
-        .build();
-    let file = std::fs::File::create(path).map_err(ExperimentError::io("create", path))?;
-    let mut writer = parquet::arrow::ArrowWriter::try_new(file, schema, Some(props)).map_err(|e| failed(&e))?;
-    writer.write(&batch).map_err(|e| failed(&e))?;
-    writer.close().map_err(|e| failed(&e))?;
+    let batch = RecordBatch::try_new(schema, columns).map_err(|e| failed(&e))?;
+    metaplate_store::write_table(path, &batch, &[("metaplate.experiment", &experiment)]).map_err(|e| failed(&e))?;
     Ok(())
 }

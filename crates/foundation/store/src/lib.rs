@@ -21,7 +21,8 @@
 //!
 //! - [`manifest`]: [`Manifest`], what the dataset is ([`DatasetMeta`]: recipe and resolved configuration, scene,
 //!   software version, seed, grid, and [`DatasetDescription`], what `ir` holds: its unit and `pre_samples`, the
-//!   samples before time 0) and `config_hash`; written at creation, its batch list refreshed at checkpoint and
+//!   samples before time 0; and, for points on no lattice, [`ScatteredPoints`]: their positions, the grid then
+//!   only their index) and `config_hash`; written at creation, its batch list refreshed at checkpoint and
 //!   finish. The batch files live in `batches/` ([`BATCH_DIR`]) so that `pl.read_parquet("RUN/batches")` and
 //!   `pq.read_table("RUN/batches")` read the dataset without our code (a JSON file beside them makes both refuse
 //!   the directory).
@@ -54,6 +55,7 @@
 //! - [`wav`]: [`export_wav`] and [`write_wav_f32`] write 32-bit float multichannel WAV files (impulse responses,
 //!   drive signals); [`read_wav`] reads any WAV file.
 //! - [`write_bytes`]: a small file written durably outside a dataset (an experiment session's plan, for example).
+//! - [`write_table`]: a small table outside a dataset (scored trials, band points) as one Parquet file, durably.
 //! - [`free_bytes`]: the free space of the disk a run writes to (statvfs), for the monitor and the pre-flight.
 //! - [`lock`]: the exclusive writer lock on a journal, released by the operating system when the process dies, and
 //!   [`LockHolder`], who holds it.
@@ -83,6 +85,7 @@ pub mod record;
 mod resume;
 pub mod schema;
 mod space;
+mod table;
 pub mod test_hook;
 pub mod wav;
 mod writer;
@@ -95,12 +98,13 @@ pub use journal::{JOURNAL_FILE, JournalCommit, JournalIssue, JournalView};
 pub use lock::{LockHolder, try_lock_exclusive};
 pub use manifest::{
     BATCH_DIR, BatchInfo, DatasetDescription, DatasetMeta, GridSpec, IR_UNIT_M_S_PER_N, MANIFEST_FILE, Manifest,
-    SCHEMA_VERSION, SceneId,
+    SCHEMA_VERSION, ScatteredPoints, SceneId,
 };
 pub use reader::{BatchRows, Dataset, ReadOptions};
 pub use record::{IrMeta, IrRecord};
 pub use resume::{Quarantined, ResumeReport};
 pub use schema::{RowKind, Status};
 pub use space::free_bytes;
+pub use table::write_table;
 pub use wav::{export_wav, read_wav, write_wav_f32};
 pub use writer::{DatasetWriter, IfExists, QUARANTINE_DIR};

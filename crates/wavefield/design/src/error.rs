@@ -29,4 +29,21 @@ pub enum DesignError {
         /// The solver's complaint.
         why: String,
     },
+    /// A search's results could not be written or read, or do not fit together (another search's parts,
+    /// designs missing from a merge).
+    #[error("search results {path}: {why}")]
+    Results {
+        /// The file or folder.
+        path: String,
+        /// What is wrong.
+        why: String,
+    },
+    /// A search was stopped (Ctrl-C) between designs: every design finished is written; the same command resumes.
+    #[error("stopped after {done} of {total} designs; run the same command again to resume")]
+    Stopped {
+        /// Designs of the shard finished.
+        done: usize,
+        /// Designs of the shard in all.
+        total: usize,
+    },
 }

@@ -16,9 +16,12 @@ mod band;
 mod bloch;
 mod elements;
 mod error;
+mod figure;
 mod mesh;
 mod model;
+mod parquet;
 mod report;
+pub mod search;
 mod spec;
 
 pub use band::{
@@ -27,6 +30,8 @@ pub use band::{
 };
 pub use bloch::{Mode, Reduction, Sides};
 pub use error::DesignError;
+pub use figure::band_figure;
 pub use mesh::{Mesh, MeshOptions};
 pub use model::CellModel;
+pub use parquet::write_parquet;
 pub use spec::{BUILTIN_DESIGNS, Design, PAPER_PLATE, PlateSpec, ResonatorSpec, RodSide, RodSpec, SpringMassSpec};

@@ -7,4 +7,5 @@ mod files;
 mod homogeneous;
 mod paper;
 mod pwe;
+mod search;
 mod spring_mass;
