@@ -29,6 +29,11 @@ fn dataset(dir: &Path) -> PathBuf {
         "metamaterial",
         "--grid",
         "13x7",
+        // The mock lab's band: cut from the lab's cache entry for this plate (tests/analyze.rs).
+        "--band-lo-hz",
+        "40",
+        "--band-hi-hz",
+        "800",
         "--out",
         data.to_str().unwrap(),
         "--cache-dir",

@@ -41,7 +41,13 @@ fn original() -> &'static Path {
         let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
         std::fs::create_dir_all(&cache).unwrap();
         let (d, c) = (data.to_str().unwrap(), cache.to_str().unwrap());
-        ok(&["simulate", "greens", "--scene", "metamaterial", "--grid", "13x7", "--out", d, "--cache-dir", c]);
+        // The mock lab's band: cut from the lab's cache entry for this plate (tests/analyze.rs).
+        let band = ["--band-lo-hz", "40", "--band-hi-hz", "800"];
+        ok(&[
+            &["simulate", "greens", "--scene", "metamaterial", "--grid", "13x7", "--out", d, "--cache-dir", c][..],
+            &band,
+        ]
+        .concat());
         data
     })
 }
