@@ -4,6 +4,7 @@
 
 use clap::{Parser, Subcommand};
 
+mod aim;
 mod analyze;
 mod budget;
 mod cache;
@@ -46,6 +47,12 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Aiming the beam: `aim teach` jogs galvo mirrors onto marks with the keyboard and writes the fit the hardware
+    /// file's `[aim]` names (or, with --scene, the mock lab's mirrors).
+    Aim {
+        #[command(subcommand)]
+        command: aim::AimCommand,
+    },
     /// The paper's Wave Field Analysis on a dataset: wavelength, pixel area, POD, authority, refresh, driven
     /// response (JSON with --json), and its figures with --figures DIR.
     Analyze(analyze::AnalyzeArgs),
@@ -101,7 +108,8 @@ enum Command {
     /// The Green's-function error budget of a scene on the mock lab: the processing floor (every imperfection
     /// off), each imperfection alone, all on, per octave band, and whether the terms add up (JSON with --json).
     Budget(budget::BudgetArgs),
-    /// Metamaterial design: a unit cell's band structure (`design band DESIGN`).
+    /// Metamaterial design: a unit cell's band structure (`design band`), a search over designs (`design search`,
+    /// `design merge`).
     Design {
         #[command(subcommand)]
         command: design::DesignCommand,
@@ -134,6 +142,7 @@ fn main() -> std::process::ExitCode {
 
 fn dispatch(command: Command) -> anyhow::Result<()> {
     match command {
+        Command::Aim { command } => aim::run(&command),
         Command::Analyze(args) => analyze::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Check(args) => check::run(&args),

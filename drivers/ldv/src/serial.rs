@@ -12,12 +12,17 @@ use crate::line::{BAUD_RATE, LineError, PortSelector, SerialLine};
 /// [`LineError::Disconnected`] until [`SerialLine::reopen`] succeeds.
 pub struct SerialPortLine {
     selector: PortSelector,
+    baud_rate: u32,
     port: Option<Box<dyn SerialPort>>,
 }
 
 impl std::fmt::Debug for SerialPortLine {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SerialPortLine").field("selector", &self.selector).field("open", &self.port.is_some()).finish()
+        f.debug_struct("SerialPortLine")
+            .field("selector", &self.selector)
+            .field("baud_rate", &self.baud_rate)
+            .field("open", &self.port.is_some())
+            .finish()
     }
 }
 
@@ -27,8 +32,17 @@ impl SerialPortLine {
     /// # Errors
     /// [`LineError::Disconnected`] when no port matches or it cannot be opened (absent, busy, no permission).
     pub fn open(selector: PortSelector) -> Result<Self, LineError> {
-        let port = open_port(&selector)?;
-        Ok(Self { selector, port: Some(port) })
+        Self::open_at(selector, BAUD_RATE)
+    }
+
+    /// Opens the port named by `selector` at `baud_rate` 8N1, no flow control (another instrument on the same
+    /// transport: Zaber stages, whose rate the hardware file names).
+    ///
+    /// # Errors
+    /// [`LineError::Disconnected`] when no port matches or it cannot be opened (absent, busy, no permission).
+    pub fn open_at(selector: PortSelector, baud_rate: u32) -> Result<Self, LineError> {
+        let port = open_port(&selector, baud_rate)?;
+        Ok(Self { selector, baud_rate, port: Some(port) })
     }
 
     /// The selector this line reopens with.
@@ -78,18 +92,18 @@ impl SerialLine for SerialPortLine {
     fn reopen(&mut self) -> Result<(), LineError> {
         // Close first: the port is opened exclusively (TIOCEXCL), so the old handle would block the new one.
         self.port = None;
-        self.port = Some(open_port(&self.selector)?);
+        self.port = Some(open_port(&self.selector, self.baud_rate)?);
         Ok(())
     }
 }
 
-fn open_port(selector: &PortSelector) -> Result<Box<dyn SerialPort>, LineError> {
+fn open_port(selector: &PortSelector, baud_rate: u32) -> Result<Box<dyn SerialPort>, LineError> {
     let path = match selector {
         PortSelector::Path(path) => path.clone(),
         PortSelector::UsbSerial(serial) => find_by_usb_serial(serial)?,
     };
     let name = path.to_string_lossy().into_owned();
-    serialport::new(name.clone(), BAUD_RATE)
+    serialport::new(name.clone(), baud_rate)
         .data_bits(DataBits::Eight)
         .parity(Parity::None)
         .stop_bits(StopBits::One)

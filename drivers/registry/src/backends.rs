@@ -12,11 +12,15 @@ pub enum Capability {
     Audio,
     /// `[keypad]`: the response keypad (optional; beside the rig, not in it).
     Keypad,
+    /// `[aim]`: what puts the beam on a point ([`metaplate_core::aim::Aim`]; optional: without it every point is
+    /// refused).
+    Aim,
 }
 
 impl Capability {
     /// Every capability, in the hardware file's order.
-    pub const ALL: [Capability; 4] = [Capability::Vibrometer, Capability::Daq, Capability::Audio, Capability::Keypad];
+    pub const ALL: [Capability; 5] =
+        [Capability::Vibrometer, Capability::Daq, Capability::Audio, Capability::Keypad, Capability::Aim];
 
     /// Its section in the hardware file.
     pub fn section(self) -> &'static str {
@@ -25,6 +29,7 @@ impl Capability {
             Capability::Daq => "daq",
             Capability::Audio => "audio",
             Capability::Keypad => "keypad",
+            Capability::Aim => "aim",
         }
     }
 
@@ -35,6 +40,7 @@ impl Capability {
             Capability::Daq => "DAQ",
             Capability::Audio => "audio interface",
             Capability::Keypad => "keypad",
+            Capability::Aim => "aimer",
         }
     }
 }
@@ -105,7 +111,7 @@ impl Backend {
 }
 
 /// Every backend of every capability.
-pub const BACKENDS: [Backend; 6] = [
+pub const BACKENDS: [Backend; 8] = [
     Backend {
         capability: Capability::Vibrometer,
         name: "polytec",
@@ -161,6 +167,27 @@ pub const BACKENDS: [Backend; 6] = [
         linux_only: true,
         list: list_hidraw,
     },
+    Backend {
+        capability: Capability::Aim,
+        name: "galvo",
+        needs: "galvanometer mirrors on two analog outputs (`[aim.outputs]`: `backend = \"nidaqmx\"`, `device`, \
+                `x_channel`, `y_channel`), the fit `metaplate aim teach` writes (`fit`), the settling time \
+                (`settle_ms`)",
+        feature: "(none: always built; its outputs need theirs)",
+        available: true,
+        linux_only: false,
+        list: list_nothing,
+    },
+    Backend {
+        capability: Capability::Aim,
+        name: "zaber",
+        needs: "Zaber stages on a serial port (`port`, `moves = \"head\"` or `\"plate\"`), and per axis (`[aim.x]`, \
+                `[aim.y]`) the `device`, `axis`, the product's `microstep_um` and the plate's `origin_mm`",
+        feature: "zaber",
+        available: cfg!(feature = "zaber"),
+        linux_only: false,
+        list: list_zaber,
+    },
 ];
 
 /// The backends of `capability`.
@@ -184,16 +211,20 @@ fn list_nothing() -> Result<Vec<Found>, ListError> {
     Ok(Vec::new())
 }
 
-/// NI-DAQmx devices by their NI names; none when NI-DAQmx is not installed (not an error: the backend is there,
-/// the vendor library is not).
+/// NI-DAQmx devices by their NI names, with product type and serial number; none when NI-DAQmx is not installed
+/// (not an error: the backend is there, the vendor library is not).
 #[cfg(feature = "nidaqmx")]
 fn list_nidaqmx() -> Result<Vec<Found>, ListError> {
-    let names =
-        metaplate_daq::nidaqmx_device_names().map_err(|e| ListError { backend: "nidaqmx", detail: e.to_string() })?;
-    Ok(names
+    let devices =
+        metaplate_daq::nidaqmx_devices().map_err(|e| ListError { backend: "nidaqmx", detail: e.to_string() })?;
+    Ok(devices
         .unwrap_or_default()
         .into_iter()
-        .map(|name| Found { key: "daq.device", value: name, description: "NI-DAQmx device".into() })
+        .map(|d| Found {
+            key: "daq.device",
+            value: d.name,
+            description: format!("NI {} s/n {:08X}", d.product_type, d.serial),
+        })
         .collect())
 }
 
@@ -262,6 +293,18 @@ fn list_serial() -> Result<Vec<Found>, ListError> {
 #[cfg(not(feature = "serial"))]
 fn list_serial() -> Result<Vec<Found>, ListError> {
     Ok(Vec::new())
+}
+
+/// Serial ports where a Zaber chain answers, with its devices.
+#[cfg(feature = "zaber")]
+fn list_zaber() -> Result<Vec<Found>, ListError> {
+    let chains = crate::zaber::chains_on_serial_ports().map_err(|detail| ListError { backend: "zaber", detail })?;
+    Ok(chains.into_iter().map(|(value, description)| Found { key: "aim.port", value, description }).collect())
+}
+
+#[cfg(not(feature = "zaber"))]
+fn list_zaber() -> Result<Vec<Found>, ListError> {
+    list_nothing()
 }
 
 /// The LabJack U6s on USB (vendor `0x0CD5`, product `0x0006`), by the serial number of their USB descriptor.

@@ -10,7 +10,9 @@ use metaplate_u6_protocol::config::MAX_STREAM_RESOLUTION_INDEX;
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 
+use crate::aim::AimSection;
 use crate::backends::{self, Capability};
+use crate::nidaqmx::NidaqmxDaq;
 
 /// Why a hardware file cannot be used as it is, or its rig cannot be opened.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -194,21 +196,6 @@ impl LabjackU6Daq {
     }
 }
 
-/// `[daq]` with `backend = "nidaqmx"`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct NidaqmxDaq {
-    /// NI device name as NI MAX shows it (`Dev1`).
-    pub device: String,
-    /// How long one block read waits, s (default 10; valid range: finite, > 0).
-    #[serde(default = "default_read_timeout_s")]
-    pub read_timeout_s: f64,
-}
-
-fn default_read_timeout_s() -> f64 {
-    10.0
-}
-
 /// `[audio]`: the multichannel audio interface.
 #[derive(Debug, Clone, PartialEq)]
 pub enum AudioSection {
@@ -327,6 +314,8 @@ pub struct HardwareFile {
     pub audio: AudioSection,
     /// The response keypad, if one is used.
     pub keypad: Option<KeypadSection>,
+    /// What aims the beam, if anything does (`[aim]`).
+    pub aim: Option<AimSection>,
     /// The cabling.
     pub wiring: WiringSection,
 }
@@ -340,6 +329,7 @@ struct RawFile {
     daq: toml::Table,
     audio: toml::Table,
     keypad: Option<toml::Table>,
+    aim: Option<toml::Table>,
     wiring: WiringSection,
 }
 
@@ -385,7 +375,18 @@ impl HardwareFile {
             Some(("hidraw", rest)) => Some(KeypadSection::Hidraw(keys(path, "keypad", rest)?)),
             Some((other, _)) => return Err(unknown_backend(path, Capability::Keypad, other)),
         };
-        let file = Self { path: path.to_path_buf(), plate: raw.plate, ldv, daq, audio, keypad, wiring: raw.wiring };
+        let aim = match raw.aim.map(|table| section(path, Capability::Aim, table)).transpose()? {
+            None => None,
+            Some(("galvo", rest)) => {
+                Some(crate::aim::parse_galvo(path, rest).map_err(|(key, reason)| bad(&key, reason))?)
+            }
+            Some(("zaber", rest)) => {
+                Some(AimSection::Zaber(crate::zaber::parse_zaber(rest).map_err(|(key, reason)| bad(&key, reason))?))
+            }
+            Some((other, _)) => return Err(unknown_backend(path, Capability::Aim, other)),
+        };
+        let file =
+            Self { path: path.to_path_buf(), plate: raw.plate, ldv, daq, audio, keypad, aim, wiring: raw.wiring };
         match &file.ldv {
             LdvSection::Polytec(polytec) => {
                 if polytec.baud != BAUD_RATE {
@@ -411,12 +412,7 @@ impl HardwareFile {
                 }
             }
             DaqSection::Nidaqmx(ni) => {
-                if ni.device.is_empty() || ni.device.contains('\0') {
-                    return Err(bad("daq.device", format!("{:?} is not an NI device name (`Dev1`)", ni.device)));
-                }
-                if !(ni.read_timeout_s.is_finite() && ni.read_timeout_s > 0.0) {
-                    return Err(bad("daq.read_timeout_s", format!("{} is not a positive time", ni.read_timeout_s)));
-                }
+                ni.settings(path).map_err(|(key, reason)| bad(&key, reason))?;
             }
         }
         if let Some(KeypadSection::Hidraw(keypad)) = &file.keypad {
@@ -442,7 +438,7 @@ impl HardwareFile {
         }
     }
 
-    /// The backend named for each instrument, in the order `ldv`, `daq`, `audio`, `keypad` (if any).
+    /// The backend named for each instrument, in the order `ldv`, `daq`, `audio`, `keypad` and `aim` (if any).
     pub fn backends(&self) -> Vec<(Capability, &'static str)> {
         let mut named = vec![
             (
@@ -468,6 +464,9 @@ impl HardwareFile {
         ];
         if let Some(KeypadSection::Hidraw(_)) = self.keypad {
             named.push((Capability::Keypad, "hidraw"));
+        }
+        if let Some(aim) = &self.aim {
+            named.push((Capability::Aim, aim.backend()));
         }
         named
     }

@@ -53,6 +53,7 @@
 //! # backend = "nidaqmx"
 //! # device = "Dev1"          # the NI device name (NI MAX)
 //! # read_timeout_s = 10.0    # optional (default 10): longest wait for one block, s
+//! # terminal, trigger, library, [daq.inputs.aiN]: optional, see `nidaqmx.rs` (NidaqmxDaq)
 //!
 //! [audio]                    # the multichannel audio interface
 //! backend = "alsa"           # Linux only
@@ -75,15 +76,20 @@
 //! loopback_volts_per_full_scale = 1.0   # V at the DAQ for a full-scale audio sample
 //! ```
 
+pub mod aim;
 pub mod backends;
 mod file;
 pub mod listing;
+mod nidaqmx;
 mod open;
+mod zaber;
 
 pub use backends::{BACKENDS, Backend, Capability, Found, ListError};
 pub use file::{
     AlsaAudio, AnalogLdv, AudioSection, DaqSection, HardwareError, HardwareFile, HidrawKeypad, KeypadSection,
-    LabjackU6Daq, LdvSection, NidaqmxDaq, PolytecLdv, UsbIds, WiringSection,
+    LabjackU6Daq, LdvSection, PolytecLdv, UsbIds, WiringSection,
 };
 pub use listing::{Listing, draft_hardware_file, list_connected, listings_json, listings_text};
-pub use open::{OpenedRig, open_plate_rig, open_rig};
+pub use nidaqmx::{NidaqmxDaq, NidaqmxInput};
+pub use open::{OpenedRig, open_galvo_outputs, open_plate_rig, open_rig};
+pub use zaber::{ZaberAim, ZaberAimAxis};

@@ -59,7 +59,7 @@ pub struct FoundJson {
     pub value: String,
 }
 
-/// The listings by capability section (`audio`, `daq`, `keypad`, `ldv`), as `devices --json` prints them.
+/// The listings by capability section (`aim`, `audio`, `daq`, `keypad`, `ldv`), as `devices --json` prints them.
 pub fn listings_json(listings: &[Listing]) -> BTreeMap<&'static str, Vec<ListingJson>> {
     Capability::ALL
         .iter()
@@ -163,6 +163,18 @@ pub fn draft_hardware_file(listings: &[Listing], path: &Path) -> Result<String, 
         }
         None => text.push_str("# usb = \"VID:PID\"   # no HID keyboard or keypad was found\n"),
     }
+    if let Some(chain) = listings.iter().flat_map(|l| &l.found).find(|f| f.key == "aim.port") {
+        // A Zaber chain answered: the stages as the aimer, commented out until the axes are checked.
+        let _ = write!(
+            text,
+            "\n# Zaber stages answered{}. CHOOSE: uncomment to aim with them (see the user guide).\n\
+             # [aim]\n# backend = \"zaber\"\n# port = \"{}\"\n# moves = \"head\"   # or \"plate\"\n\
+             # [aim.x]\n# device = 1\n# microstep_um = 0.047625   # CHECK: the product's microstep size\n\
+             # origin_mm = 50.0\n# [aim.y]\n# device = 2\n# microstep_um = 0.047625\n# origin_mm = 50.0\n",
+            described(chain),
+            chain.value
+        );
+    }
     text.push_str(
         "\n[wiring]   # CHECK every line against the cabling\n\
          actuator_channels = [0, 1, 2, 3, 4, 5, 6, 7]   # audio channel of each actuator, in the plate's order\n\
@@ -190,7 +202,9 @@ mod tests {
         let text = draft_hardware_file(&listings, Path::new("draft.toml")).unwrap();
         assert!(text.contains("port = \"/dev/ttyUSB0\"   # CHOOSE"), "{text}");
         let json = serde_json::to_string(&listings_json(&listings)).unwrap();
-        assert!(json.starts_with("{\"audio\":[{\"backend\":\"alsa\",\"found\":[],\"in_this_build\":"), "{json}");
+        // Sections in key order: `aim` (which lists nothing: its outputs are listed as what they are) first.
+        assert!(json.starts_with("{\"aim\":[{\"backend\":\"galvo\",\"found\":[],\"in_this_build\":true"), "{json}");
+        assert!(json.contains("\"audio\":[{\"backend\":\"alsa\",\"found\":[],\"in_this_build\":"), "{json}");
     }
 
     #[test]

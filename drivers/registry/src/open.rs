@@ -1,14 +1,15 @@
 //! Opening the rig a hardware file names, each instrument through its backend.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use metaplate_core::aim::NoAimer;
+use metaplate_core::aim::{Aim, MirrorOutputs, NoAimer};
 use metaplate_core::clock::{Clock, RealClock};
 use metaplate_core::rig::Rig;
 use metaplate_core::scene::Scene;
 use metaplate_keypad::{HidInput, Keypad};
 
+use crate::aim::{AimSection, MirrorOutputsSection};
 use crate::backends::{self, Capability};
 use crate::file::{AudioSection, DaqSection, HardwareError, HardwareFile, KeypadSection, LdvSection};
 
@@ -72,16 +73,10 @@ pub fn open_rig(file: &HardwareFile) -> Result<OpenedRig, HardwareError> {
     }
     let clock: Arc<dyn Clock> = Arc::new(RealClock::new());
     let vibrometer = open_ldv(&file.ldv)?;
-    let daq = open_daq(&file.daq)?;
+    let daq = open_daq(&file.daq, &file.path)?;
     let audio = open_audio(&file.audio)?;
     let keypad = file.keypad.as_ref().map(|keypad| open_keypad(keypad, &clock)).transpose()?;
-    // No aiming backend exists yet (galvo mirrors and Zaber stages are to come): every point is refused, naming
-    // why, so a scan or a pre-flight stops before it moves anything.
-    let aim = Box::new(NoAimer {
-        detail: "this build has no aiming backend yet (galvo mirrors and Zaber stages are to come): a hardware rig \
-                 can identify its instruments but cannot put the beam on a point"
-            .into(),
-    });
+    let aim = open_aim(file, &clock)?;
     Ok(OpenedRig { rig: Rig { vibrometer, aim, daq, audio, clock, wiring: file.wiring() }, keypad })
 }
 
@@ -122,7 +117,7 @@ fn open_ldv(section: &LdvSection) -> Result<Box<dyn metaplate_core::vibrometer::
     }
 }
 
-fn open_daq(section: &DaqSection) -> Result<Box<dyn metaplate_core::daq::Daq + Send>, HardwareError> {
+fn open_daq(section: &DaqSection, file_path: &Path) -> Result<Box<dyn metaplate_core::daq::Daq + Send>, HardwareError> {
     match section {
         DaqSection::LabjackU6(u6) => {
             let serial = &u6.serial;
@@ -145,12 +140,20 @@ fn open_daq(section: &DaqSection) -> Result<Box<dyn metaplate_core::daq::Daq + S
         DaqSection::Nidaqmx(ni) => {
             #[cfg(feature = "nidaqmx")]
             {
-                let daq = metaplate_daq::NiDaqmx::open(&ni.device, ni.read_timeout_s)
+                let settings = ni.settings(file_path).map_err(|(key, reason)| HardwareError::File {
+                    path: file_path.to_path_buf(),
+                    key,
+                    reason,
+                })?;
+                let daq = metaplate_daq::NiDaqmx::open(&settings)
                     .map_err(|e| device(Capability::Daq, "nidaqmx", &ni.device, e))?;
                 Ok(Box::new(daq))
             }
             #[cfg(not(feature = "nidaqmx"))]
-            Err(not_built(Capability::Daq, "nidaqmx", &ni.device))
+            {
+                let _ = file_path;
+                Err(not_built(Capability::Daq, "nidaqmx", &ni.device))
+            }
         }
     }
 }
@@ -192,6 +195,94 @@ fn open_keypad(section: &KeypadSection, clock: &Arc<dyn Clock>) -> Result<Keypad
             {
                 let _ = clock;
                 Err(not_built(Capability::Keypad, "hidraw", &hid.usb))
+            }
+        }
+    }
+}
+
+/// The galvo mirrors' outputs the `[aim]` section of `file` names, opened, and the fit file it names (what
+/// `metaplate aim teach` drives and writes).
+///
+/// # Errors
+/// [`HardwareError::File`] when there is no galvo `[aim]`; [`HardwareError::NotInThisBuild`] for outputs this
+/// build lacks; [`HardwareError::Device`] when they cannot be opened.
+pub fn open_galvo_outputs(file: &HardwareFile) -> Result<(Box<dyn MirrorOutputs>, PathBuf), HardwareError> {
+    match &file.aim {
+        Some(AimSection::Galvo(galvo)) => Ok((open_mirror_outputs(file, &galvo.outputs)?, galvo.fit.clone())),
+        Some(AimSection::Zaber(_)) => Err(HardwareError::File {
+            path: file.path.clone(),
+            key: "aim.backend".into(),
+            reason: "\"zaber\": stages move in mm from their own travel and need no taught fit (teaching is for \
+                     galvo mirrors)"
+                .into(),
+        }),
+        None => Err(HardwareError::File {
+            path: file.path.clone(),
+            key: "aim".into(),
+            reason: "missing: teaching needs an [aim] section with backend = \"galvo\"".into(),
+        }),
+    }
+}
+
+/// The aimer `[aim]` names, or [`NoAimer`] naming the section to add: the galvo fit is read and checked now, the
+/// outputs opened.
+fn open_aim(file: &HardwareFile, clock: &Arc<dyn Clock>) -> Result<Box<dyn Aim + Send>, HardwareError> {
+    if let Some(AimSection::Zaber(zaber)) = &file.aim {
+        use crate::zaber::OpenFailure;
+        return zaber.open().map_err(|failure| match failure {
+            OpenFailure::Key(key, reason) => HardwareError::File { path: file.path.clone(), key, reason },
+            OpenFailure::Device(detail) => device(Capability::Aim, "zaber", &zaber.port.display().to_string(), detail),
+            OpenFailure::NotBuilt => not_built(Capability::Aim, "zaber", &zaber.port.display().to_string()),
+        });
+    }
+    let Some(AimSection::Galvo(galvo)) = &file.aim else {
+        return Ok(Box::new(NoAimer {
+            detail: format!(
+                "{} has no [aim] section: add one (`backend = \"galvo\"`, see the user guide) to put the beam on \
+                 points",
+                file.path.display()
+            ),
+        }));
+    };
+    let fit = metaplate_aim::galvo::file::read(&galvo.fit).map_err(|e| HardwareError::File {
+        path: file.path.clone(),
+        key: "aim.fit".into(),
+        reason: e.to_string(),
+    })?;
+    let outputs = open_mirror_outputs(file, &galvo.outputs)?;
+    let settings = metaplate_aim::galvo::GalvoSettings { settle_s: galvo.settle_ms * 1e-3 };
+    let aimer = metaplate_aim::galvo::GalvoAimer::new(fit, outputs, Arc::clone(clock), settings)
+        .map_err(|e| device(Capability::Aim, "galvo", &galvo.fit.display().to_string(), e))?;
+    Ok(Box::new(aimer))
+}
+
+/// The mirrors' outputs of `[aim.outputs]`, opened.
+fn open_mirror_outputs(
+    file: &HardwareFile,
+    section: &MirrorOutputsSection,
+) -> Result<Box<dyn MirrorOutputs>, HardwareError> {
+    match section {
+        MirrorOutputsSection::Nidaqmx(ni) => {
+            #[cfg(feature = "nidaqmx")]
+            {
+                let _ = file;
+                let outputs =
+                    metaplate_daq::NiMirrorOutputs::open(&ni.device, &ni.x_channel, &ni.y_channel, ni.limit_v, None)
+                        .map_err(|e| device(Capability::Aim, "galvo", &ni.device, e))?;
+                Ok(Box::new(outputs))
+            }
+            #[cfg(not(feature = "nidaqmx"))]
+            {
+                let _ = ni;
+                let reason = backends::find(Capability::Daq, "nidaqmx")
+                    .and_then(|b| b.missing_reason())
+                    .unwrap_or_else(|| "this build lacks NI-DAQmx".into());
+                Err(HardwareError::NotInThisBuild {
+                    path: file.path.clone(),
+                    key: "aim.outputs.backend".into(),
+                    backend: "nidaqmx",
+                    reason,
+                })
             }
         }
     }

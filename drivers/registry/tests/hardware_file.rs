@@ -57,6 +57,33 @@ fn nidaqmx_and_the_keypad_are_selectable() {
     assert_eq!(named, ["polytec", "nidaqmx", "alsa", "hidraw"]);
 }
 
+/// The example with an NI DAQ `Dev1` and the `[daq]` keys `rest` (which may open `[daq.inputs.aiN]` tables).
+fn ni(rest: &str) -> String {
+    with_daq(&format!("[daq]\nbackend = \"nidaqmx\"\ndevice = \"Dev1\"\n{rest}"))
+}
+
+#[test]
+fn nidaqmx_terminal_configuration_range_trigger_and_library_reach_the_settings() {
+    use metaplate_daq::{NiInput, StartTrigger, TerminalConfig};
+    let text = ni("terminal = \"NRSE\"\ntrigger = \"PFI0\"\nlibrary = \"lib/libnidaqmx.so\"\n\
+                   [daq.inputs.ai0]\nterminal = \"diff\"\nrange_v = 5.0\n[daq.inputs.ai3]\nrange_v = 0.2\n");
+    let file = HardwareFile::parse(&text, Path::new("/lab/rig.toml")).unwrap();
+    let DaqSection::Nidaqmx(section) = &file.daq else { panic!("{:?}", file.daq) };
+    let settings = section.settings(&file.path).unwrap();
+    assert_eq!(settings.terminal, TerminalConfig::Nrse);
+    assert_eq!(settings.trigger, StartTrigger::Terminal("/Dev1/PFI0".into()));
+    assert_eq!(settings.library.as_deref(), Some(Path::new("/lab/lib/libnidaqmx.so")), "relative to the file");
+    assert_eq!(settings.input(0), NiInput { terminal: TerminalConfig::Differential, range_v: Some(5.0) });
+    assert_eq!(settings.input(3), NiInput { terminal: TerminalConfig::Nrse, range_v: Some(0.2) });
+    assert_eq!(settings.input(1), NiInput { terminal: TerminalConfig::Nrse, range_v: None });
+    let ao = ni("trigger = \"ao\"\n");
+    let DaqSection::Nidaqmx(section) = &parse(&ao).unwrap().daq else { panic!() };
+    assert_eq!(
+        section.settings(Path::new("rig.toml")).unwrap().trigger.source("Dev1").as_deref(),
+        Some("/Dev1/ao/StartTrigger")
+    );
+}
+
 /// The example with an analog vibrometer of range line `range` in place of the Polytec.
 fn analog(range: &str) -> String {
     let start = EXAMPLE.find("[ldv]").unwrap();
@@ -112,6 +139,12 @@ fn bad_files_name_the_key_and_the_reason() {
             "daq.read_timeout_s",
             "-1",
         ),
+        (ni("terminal = \"single\"\n"), "daq.terminal", "not a terminal configuration: one of default, rse"),
+        (ni("trigger = \"start\"\n"), "daq.trigger", "not a start trigger"),
+        (ni("[daq.inputs.ai0]\nterminal = \"psuedo\"\n"), "daq.inputs.ai0.terminal", "\"psuedo\""),
+        (ni("[daq.inputs.ai1]\nrange_v = 0.0\n"), "daq.inputs.ai1.range_v", "not a positive voltage"),
+        (ni("[daq.inputs.x1]\nrange_v = 1.0\n"), "daq.inputs.x1", "not an analog input"),
+        (ni("[daq.inputs.ai0]\ngain = 1.0\n"), "daq", "gain"),
         (EXAMPLE.to_string() + "\n[keypad]\nbackend = \"hidraw\"\nusb = \"046d\"\n", "keypad.usb", "not VID:PID"),
         (EXAMPLE.replace("loopback_channel = 8", "loopback_channel = 3"), "wiring", "used twice"),
         (EXAMPLE.replace("plate = ", "plates = "), "(file)", "plates"),

@@ -125,7 +125,9 @@ pub mod budget;
 mod chain;
 mod direct_daq;
 mod links;
+pub mod mirrors;
 pub mod session;
+pub mod teacher;
 mod truth;
 pub mod windowed_truth;
 
@@ -484,6 +486,13 @@ impl MockLab {
     /// The wiring the rig reports.
     pub fn wiring(&self) -> &Wiring {
         &self.wiring
+    }
+
+    /// The lab's galvanometer mirrors ([`mirrors::MockMirrors`], geometry drawn from the scene's seed): the beam
+    /// of the lab's vibrometer lands where they point, so a galvo aimer over them replaces the rig's in-process
+    /// aimer. Take them once: a second pair would steer the same beam.
+    pub fn mirrors(&self) -> mirrors::MockMirrors {
+        mirrors::MockMirrors::on_ldv(mirrors::MirrorGeometry::seeded(self.scene.seed), Arc::clone(&self.ldv))
     }
 
     /// The mock LDV device (to inspect the controller, or latch a fault by hand in a test).

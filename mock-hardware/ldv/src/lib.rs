@@ -28,6 +28,7 @@ mod pty;
 #[cfg(not(unix))]
 #[path = "pty_unsupported.rs"]
 mod pty;
+mod served;
 mod speckle;
 mod unit;
 
@@ -36,5 +37,6 @@ pub use device::MockDevice;
 pub use faults::{Fault, FaultSchedule, TimedFaults};
 pub use inprocess::MockLine;
 pub use pty::{PtyError, PtyServer};
+pub use served::ServedDevice;
 pub use speckle::{DROPOUT_LEVEL_PERCENT, SpeckleModel, quiet_spec};
 pub use unit::{DecoderSpec, UnitSpec};

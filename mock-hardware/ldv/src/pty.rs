@@ -10,7 +10,7 @@ use std::thread::JoinHandle;
 use nix::poll::{PollFd, PollFlags, poll};
 use nix::sys::termios::{SetArg, cfmakeraw, tcgetattr, tcsetattr};
 
-use crate::device::MockDevice;
+use crate::served::ServedDevice;
 
 /// How long the server thread waits for host bytes before it looks at its stop flag, ms: bounds shutdown time.
 const POLL_MS: i32 = 5;
@@ -31,8 +31,8 @@ pub enum PtyError {
     Thread(std::io::Error),
 }
 
-/// A [`MockDevice`] answering on a pseudo-terminal from a background thread. Open [`PtyServer::path`] with the
-/// real serial transport. The thread stops (and the terminal closes) when the server is dropped.
+/// A mock device ([`crate::MockDevice`], or any [`ServedDevice`]) answering on a pseudo-terminal from a background
+/// thread. Open [`PtyServer::path`] with the real serial transport. The thread stops (and the terminal closes) when the server is dropped.
 ///
 /// A pseudo-terminal cannot vanish like a USB adapter, and the server cannot tell when the host reopens it: here a
 /// disconnect fault loses its line (the host sees a timeout, not an I/O error), and the link comes back with the
@@ -51,7 +51,7 @@ impl PtyServer {
     ///
     /// # Errors
     /// [`PtyError`] when the terminal or the thread cannot be created.
-    pub fn spawn(device: Arc<Mutex<MockDevice>>) -> Result<Self, PtyError> {
+    pub fn spawn<D: ServedDevice>(device: Arc<Mutex<D>>) -> Result<Self, PtyError> {
         let pair = nix::pty::openpty(None, None).map_err(|source| PtyError::Sys { step: "openpty", source })?;
         let fds = [pair.master, pair.slave];
         let setup = || -> Result<PathBuf, PtyError> {
@@ -73,7 +73,7 @@ impl PtyServer {
         let thread_stop = Arc::clone(&stop);
         let master = pair.master;
         let thread =
-            std::thread::Builder::new().name("mock-ldv-pty".into()).spawn(move || serve(master, &device, &thread_stop));
+            std::thread::Builder::new().name("mock-pty".into()).spawn(move || serve(master, &device, &thread_stop));
         match thread {
             Ok(thread) => Ok(Self { path, stop, thread: Some(thread), fds }),
             Err(e) => {
@@ -109,7 +109,7 @@ fn close_all(fds: [RawFd; 2]) {
 /// Reads host bytes, feeds the device, writes its answers; until `stop` or an unrecoverable terminal error.
 /// The slave side stays open in this process, so the master never sees a hang-up when the host closes and
 /// reopens the port.
-fn serve(master: RawFd, device: &Mutex<MockDevice>, stop: &AtomicBool) {
+fn serve<D: ServedDevice>(master: RawFd, device: &Mutex<D>, stop: &AtomicBool) {
     let mut buf = [0u8; 512];
     while !stop.load(Ordering::Acquire) {
         let mut fds = [PollFd::new(master, PollFlags::POLLIN)];

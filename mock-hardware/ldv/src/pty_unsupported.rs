@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
-use crate::device::MockDevice;
+use crate::served::ServedDevice;
 
 /// Why the pseudo-terminal server could not start.
 #[derive(Debug, thiserror::Error)]
@@ -25,7 +25,7 @@ impl PtyServer {
     ///
     /// # Errors
     /// Always [`PtyError::Unsupported`].
-    pub fn spawn(_device: Arc<Mutex<MockDevice>>) -> Result<Self, PtyError> {
+    pub fn spawn<D: ServedDevice>(_device: Arc<Mutex<D>>) -> Result<Self, PtyError> {
         Err(PtyError::Unsupported)
     }
 

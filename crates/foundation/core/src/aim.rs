@@ -75,6 +75,30 @@ pub trait Aim {
     fn reconnect(&mut self) -> Result<(), AimError>;
 }
 
+/// Two analog outputs holding a static voltage each: what drives a pair of galvanometer mirrors (an NI DAQ's AO
+/// channels on a rig, the mock lab's mirrors in a test). The galvo aimer maps plate coordinates to these volts.
+pub trait MirrorOutputs: Send {
+    /// Drives the X and Y mirrors to `x_v` and `y_v`, V; returns once the outputs hold them (the mirrors' own
+    /// settling is the aimer's to wait for).
+    ///
+    /// # Errors
+    /// `InvalidArgument` for a non-finite or out-of-range voltage (nothing written); `Disconnected` when the output
+    /// device is gone; `Device` when it refused.
+    fn set_volts(&mut self, x_v: f64, y_v: f64) -> Result<(), AimError>;
+
+    /// The outputs' range, V: every written voltage lies in `[-limit, limit]`.
+    fn limit_v(&self) -> f64;
+
+    /// Reopens the output device after a `Disconnected` (the aimer writes the last voltages again).
+    ///
+    /// # Errors
+    /// `Disconnected` when it cannot be reopened (yet).
+    fn reconnect(&mut self) -> Result<(), AimError>;
+
+    /// What drives the mirrors, for the dataset's rig record (for example "NI USB-6211 s/n 01A2B3C4 ao0, ao1").
+    fn describe(&self) -> String;
+}
+
 /// The aimer of a rig that has none configured: every point is refused, naming why, so a run stops before it starts.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct NoAimer {

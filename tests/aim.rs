@@ -1,0 +1,73 @@
+//! `metaplate aim teach` on the mock lab's mirrors, through the binary: a simulated user's key bytes (the lab's
+//! `teacher`, computed in-process on the same seeded mirrors) piped to the command, the fit it writes read back, and
+//! a 7 x 5 scan aimed through it landing within 0.3 mm of every target.
+
+use std::io::Write as _;
+use std::process::{Command, Stdio};
+use std::sync::Arc;
+
+use metaplate_aim::galvo::teach::{Teach, parse_marks_mm};
+use metaplate_aim::galvo::{GalvoAimer, GalvoSettings, file};
+use metaplate_core::aim::Aim;
+use metaplate_core::clock::VirtualClock;
+use metaplate_core::scene::Scene;
+use metaplate_lab::mirrors::{MIRRORS_LIMIT_V, MirrorGeometry, MockMirrors};
+use metaplate_lab::teacher::teach_like_a_user;
+
+const MARKS_MM: &str = "# x, y in mm\n-100,-50\n0,-50\n100,-50\n-100,0\n0,0\n100,0\n-100,50\n0,50\n100,50\n";
+
+#[test]
+fn aim_teach_on_the_mock_galvo_with_scripted_keys_lands_a_7_by_5_scan_within_0_3_mm() {
+    let dir = std::env::temp_dir().join(format!("metaplate-aim-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let marks_file = dir.join("marks.txt");
+    std::fs::write(&marks_file, MARKS_MM).unwrap();
+    // The user's keys, found on the mirrors the binary builds for the scene (same seed, same start).
+    let scene = Scene::builtin("metamaterial").unwrap();
+    let geometry = MirrorGeometry::seeded(scene.seed);
+    let mut mirrors = MockMirrors::new(geometry);
+    let mut teach = Teach::new(parse_marks_mm(MARKS_MM, "marks").unwrap(), MIRRORS_LIMIT_V).unwrap();
+    teach.start(&mut mirrors).unwrap();
+    let keys = teach_like_a_user(&mut teach, &mut mirrors).unwrap();
+
+    let fit_path = dir.join("galvo-fit.toml");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["aim", "teach", "--scene", "metamaterial", "--marks-file", marks_file.to_str().unwrap()])
+        .args(["--out", fit_path.to_str().unwrap()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(&keys).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains(&format!("wrote {}", fit_path.display())), "{stdout}");
+
+    // The binary recorded what the user taught in-process (the same keys on the same mirrors).
+    let fit = file::read(&fit_path).unwrap();
+    let taught = teach.fit(fit.model()).unwrap();
+    assert_eq!(fit.residual(), taught.residual());
+    assert!(fit.residual().max_mm < 0.3, "{:?}", fit.residual());
+
+    // The lab's view of where the beam lands: a handle on the same mirrors the aimer drives.
+    let lab_mirrors = MockMirrors::new(geometry);
+    let mut aimer = GalvoAimer::new(
+        fit,
+        Box::new(lab_mirrors.clone()),
+        Arc::new(VirtualClock::new()),
+        GalvoSettings { settle_s: 0.002 },
+    )
+    .unwrap();
+    let mut worst_m: f64 = 0.0;
+    for p in scene.grid.subset(7, 5).unwrap() {
+        let (x_m, y_m) = scene.grid.position_m(p);
+        aimer.aim_at(x_m, y_m).unwrap();
+        let (bx, by) = lab_mirrors.beam_m().unwrap();
+        worst_m = worst_m.max((bx - x_m).hypot(by - y_m));
+    }
+    assert!(worst_m < 0.3e-3, "worst landing {:.3} mm off", worst_m * 1e3);
+    let _ = std::fs::remove_dir_all(&dir);
+}
