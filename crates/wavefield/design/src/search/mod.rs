@@ -108,7 +108,7 @@ pub fn run(
         }
         let candidate = spec.candidate(index).ok_or_else(|| DesignError::Option(format!("no design {index}")))?;
         let result = evaluate(spec, &candidate);
-        parts::write_part(dir, &result, &spec.fingerprint, count)?;
+        parts::write_part(dir, &result, &spec.fingerprint)?;
         computed.push(index);
         state.done += 1;
         state.last = Some(result);

@@ -22,7 +22,6 @@ pub const PARTS_DIR: &str = "parts";
 pub const RESULTS_FILE: &str = "results.parquet";
 
 const FINGERPRINT_KEY: &str = "metaplate.search";
-const COUNT_KEY: &str = "metaplate.search_designs";
 
 /// The file of design `index` in `dir`'s parts.
 pub fn part_path(dir: &Path, index: usize) -> PathBuf {
@@ -81,41 +80,38 @@ fn output(file: &Path, e: impl std::fmt::Display) -> DesignError {
     DesignError::Results { path: file.display().to_string(), why: e.to_string() }
 }
 
-fn write(path: &Path, results: &[DesignResult], fingerprint: &str, count: usize) -> Result<(), DesignError> {
+fn write(path: &Path, results: &[DesignResult], fingerprint: &str) -> Result<(), DesignError> {
     let batch = batch(results, path)?;
-    let count = count.to_string();
-    metaplate_store::write_table(path, &batch, &[(FINGERPRINT_KEY, fingerprint), (COUNT_KEY, &count)])
-        .map_err(|e| output(path, e))
+    metaplate_store::write_table(path, &batch, &[(FINGERPRINT_KEY, fingerprint)]).map_err(|e| output(path, e))
 }
 
 /// Writes one design's result durably into `dir`'s parts (the folder made when missing).
 ///
 /// # Errors
 /// [`DesignError::Results`] when it cannot be written.
-pub fn write_part(dir: &Path, result: &DesignResult, fingerprint: &str, count: usize) -> Result<(), DesignError> {
+pub fn write_part(dir: &Path, result: &DesignResult, fingerprint: &str) -> Result<(), DesignError> {
     let parts = dir.join(PARTS_DIR);
     std::fs::create_dir_all(&parts).map_err(|e| output(&parts, e))?;
-    write(&part_path(dir, result.candidate.index), std::slice::from_ref(result), fingerprint, count)
+    write(&part_path(dir, result.candidate.index), std::slice::from_ref(result), fingerprint)
 }
 
-/// The rows of one results or part file, with its search's fingerprint and design count.
+/// The rows of one results or part file, with its search's fingerprint.
 ///
 /// # Errors
 /// [`DesignError::Results`] naming the file when it cannot be read or is not a search's results.
-pub fn read(path: &Path) -> Result<(Vec<DesignResult>, String, usize), DesignError> {
+pub fn read(path: &Path) -> Result<(Vec<DesignResult>, String), DesignError> {
     let bad = |e: &dyn std::fmt::Display| output(path, e);
     let file = std::fs::File::open(path).map_err(|e| bad(&e))?;
     let builder = ParquetRecordBatchReaderBuilder::try_new(file).map_err(|e| bad(&e))?;
     let meta = builder.metadata().file_metadata().key_value_metadata().cloned().unwrap_or_default();
     let value = |key: &str| meta.iter().find(|kv| kv.key == key).and_then(|kv| kv.value.clone());
     let fingerprint = value(FINGERPRINT_KEY).ok_or_else(|| bad(&"not a design search's results (no fingerprint)"))?;
-    let count = value(COUNT_KEY).and_then(|c| c.parse().ok()).ok_or_else(|| bad(&"no design count"))?;
     let mut rows = Vec::new();
     for batch in builder.build().map_err(|e| bad(&e))? {
         let batch = batch.map_err(|e| bad(&e))?;
         rows.extend(decode(&batch).map_err(|e| bad(&e))?);
     }
-    Ok((rows, fingerprint, count))
+    Ok((rows, fingerprint))
 }
 
 fn decode(batch: &RecordBatch) -> Result<Vec<DesignResult>, String> {
@@ -163,35 +159,45 @@ fn decode(batch: &RecordBatch) -> Result<Vec<DesignResult>, String> {
         .collect()
 }
 
+/// The per-design files in `dir`'s parts, in index order (none when the folder is absent); temporary files of a
+/// write cut off are not parts.
+fn part_files(dir: &Path) -> Result<Vec<PathBuf>, DesignError> {
+    let parts = dir.join(PARTS_DIR);
+    let entries = match std::fs::read_dir(&parts) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(output(&parts, e)),
+    };
+    let mut files = Vec::new();
+    for entry in entries {
+        let path = entry.map_err(|e| output(&parts, e))?.path();
+        let is_part = path.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
+            n.strip_prefix("design-")
+                .and_then(|n| n.strip_suffix(".parquet"))
+                .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        });
+        if is_part {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
 /// The designs finished in `dir` (its parts), by index; a part that cannot be read is left out (it is computed
 /// again) and named in the second list.
 ///
 /// # Errors
 /// [`DesignError::Results`] when the parts folder cannot be listed, or a part belongs to another search.
 pub fn finished(dir: &Path, fingerprint: &str) -> Result<(BTreeMap<usize, DesignResult>, Vec<PathBuf>), DesignError> {
-    let parts = dir.join(PARTS_DIR);
     let mut done = BTreeMap::new();
     let mut unreadable = Vec::new();
-    let entries = match std::fs::read_dir(&parts) {
-        Ok(entries) => entries,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((done, unreadable)),
-        Err(e) => return Err(output(&parts, e)),
-    };
-    for entry in entries {
-        let path = entry.map_err(|e| output(&parts, e))?.path();
-        let is_part = path.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
-            n.strip_prefix("design-")
-                .and_then(|n| n.strip_suffix(".parquet"))
-                .is_some_and(|d| d.bytes().all(|b| b.is_ascii_digit()))
-        });
-        if !is_part {
-            continue; // a temporary file of a write that was cut off, or something else
-        }
+    for path in part_files(dir)? {
         match read(&path) {
-            Ok((_, fp, _)) if fp != fingerprint => {
+            Ok((_, fp)) if fp != fingerprint => {
                 return Err(output(&path, format!("belongs to another search ({fp}, this one is {fingerprint})")));
             }
-            Ok((rows, _, _)) if rows.len() == 1 => {
+            Ok((rows, _)) if rows.len() == 1 => {
                 done.insert(rows[0].candidate.index, rows.into_iter().next().ok_or_else(|| output(&path, "empty"))?);
             }
             _ => unreadable.push(path),
@@ -211,15 +217,8 @@ pub fn merge(spec: &SearchSpec, dirs: &[PathBuf], out: &Path) -> Result<Vec<Desi
     let (fingerprint, count) = (spec.fingerprint.as_str(), spec.count());
     let mut all: BTreeMap<usize, DesignResult> = BTreeMap::new();
     for dir in dirs {
-        let parts = dir.join(PARTS_DIR);
-        let mut entries: Vec<PathBuf> = std::fs::read_dir(&parts)
-            .map_err(|e| output(&parts, e))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|e| e == "parquet"))
-            .collect();
-        entries.sort();
-        for path in entries {
-            let (rows, fp, _) = read(&path)?;
+        for path in part_files(dir)? {
+            let (rows, fp) = read(&path)?;
             if fp != fingerprint {
                 return Err(output(&path, format!("is of another search ({fp}) than the search file ({fingerprint})")));
             }
@@ -247,7 +246,7 @@ pub fn merge(spec: &SearchSpec, dirs: &[PathBuf], out: &Path) -> Result<Vec<Desi
     }
     let mut results: Vec<DesignResult> = all.into_values().collect();
     mark_front(&mut results, &spec.objectives.minimise);
-    write(out, &results, fingerprint, count)?;
+    write(out, &results, fingerprint)?;
     Ok(results)
 }
 
