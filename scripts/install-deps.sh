@@ -5,8 +5,9 @@ set -euo pipefail
 
 # Debian packages. The audio driver's ALSA backend (crate `alsa`, through `alsa-sys`) links libasound and finds it
 # with pkg-config; everything else builds without system libraries (serialport and hidapi without libudev).
-# Chromium renders `metaplate report`'s page headless in a test (cli/tests/report.rs), as a reader would see it.
-debian_packages=(libasound2-dev pkg-config chromium)
+# Chromium renders `metaplate report`'s page headless in a test (tests/report.rs), as a reader would see it. mold
+# links the test binaries in CI (.ci/run; several times faster than the default linker, and CI links about 50).
+debian_packages=(libasound2-dev pkg-config chromium mold)
 
 # Python packages used by tests that cross-check our output with independent tools (pinned), installed into the
 # project's own virtual environment `.venv` (never the system interpreter: Debian refuses that). Tests find it as
