@@ -2,7 +2,8 @@
 //! on, so scenes that differ only in their instruments, faults or setup share entries), model options, band,
 //! duration and sample rate, holding every grid point on the plate and every driving point from every actuator
 //! ([`crate::entry`]); every request with those settings, whatever its points and actuators, is cut from it, equal
-//! bit for bit to computing it alone.
+//! bit for bit to computing it alone. [`greens_functions_within`] cuts a request at another rate or band from a
+//! named entry whose frequency bins include the request's own (the ground truth from the mock lab's entry).
 //!
 //! Where: only in a directory the caller passes (nothing is written otherwise), one file per entry,
 //! `greens-<scene hash>-<entry key>.bin` (both 16 hex digits), laid out so that a request reads only its points'
@@ -24,9 +25,10 @@ use std::path::{Path, PathBuf};
 
 use metaplate_core::scene::Scene;
 
+use crate::entry::{Representation, Target};
 use crate::entry_file::{self, Expected, Lookup};
 use crate::error::PlateError;
-use crate::greens::{GreensFunctions, GreensRequest};
+use crate::greens::{GreensFunctions, GreensRequest, SpectralPlan};
 use crate::model::{ModelOptions, PlateModel};
 
 /// Bumped whenever the model's numerics or the entry's format change, so stale entries are not reused (a stale
@@ -66,18 +68,81 @@ pub fn greens_functions(
     let Some(dir) = cache_dir else {
         return PlateModel::from_scene(scene, options)?.greens_functions(request);
     };
+    cut_from_entry(scene, options, request, request, None, dir)
+}
+
+/// The band, duration and sample rate of a cache entry (its points and actuators are always all of them).
+///
+/// Valid range: as [`GreensRequest`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EntrySettings {
+    /// Band, Hz.
+    pub band_hz: (f64, f64),
+    /// Length of each impulse response, s.
+    pub duration_s: f64,
+    /// Sample rate, Hz.
+    pub sample_rate_hz: f64,
+}
+
+/// As [`greens_functions`], but cut from the entry of `entry`'s settings when that entry's frequency bins include
+/// every bin of the request's own, at the same frequencies bit for bit, and it stores band spectra: the request's
+/// responses are then synthesised from them on its own plan, equal bit for bit to computing it alone. So a request
+/// at another rate or band shares the entry another request computes anyway (the ground truth at 2 kHz, 40 to
+/// 700 Hz, with the mock lab's at 24 kHz, 40 to 800 Hz, whose bins are the same frequencies). When the bins do not
+/// fall on the entry's, the request gets its own entry, as [`greens_functions`].
+///
+/// # Errors
+/// As [`greens_functions`]; [`PlateError::InvalidParameter`] for `entry` settings out of range.
+pub fn greens_functions_within(
+    scene: &Scene,
+    options: &ModelOptions,
+    request: &GreensRequest,
+    entry: &EntrySettings,
+    cache_dir: Option<&Path>,
+) -> Result<GreensFunctions, PlateError> {
+    let Some(dir) = cache_dir else {
+        return PlateModel::from_scene(scene, options)?.greens_functions(request);
+    };
+    let entry_request = GreensRequest {
+        points: request.points.clone(),
+        actuators: request.actuators.clone(),
+        band_hz: entry.band_hz,
+        duration_s: entry.duration_s,
+        sample_rate_hz: entry.sample_rate_hz,
+    };
+    let model = PlateModel::from_scene(scene, options)?;
+    let bound = |f| model.loss_factor_bound(f);
+    let plan = SpectralPlan::new(request, &bound)?;
+    let entry_plan = SpectralPlan::new(&entry_request, &bound)?;
+    if Representation::shorter(&entry_plan) != Representation::BandSpectrum || entry_plan.bins_at(&plan).is_none() {
+        return cut_from_entry(scene, options, request, request, None, dir);
+    }
+    let target = Target { plan, sample_rate_hz: request.sample_rate_hz };
+    cut_from_entry(scene, options, &entry_request, request, Some(&target), dir)
+}
+
+/// `request` cut from the entry of `entry_request`'s band, duration and rate in `dir` (on `target`'s plan when
+/// given), the entry computed and stored first when it is missing.
+fn cut_from_entry(
+    scene: &Scene,
+    options: &ModelOptions,
+    entry_request: &GreensRequest,
+    request: &GreensRequest,
+    target: Option<&Target>,
+    dir: &Path,
+) -> Result<GreensFunctions, PlateError> {
     // Before the computation, so that an unusable directory fails at once rather than after it.
     ensure_dir(dir)?;
     let scene_hash = scene.physics_hash();
-    let key = cache_key(scene_hash, options, request);
+    let key = cache_key(scene_hash, options, entry_request);
     let path = cache_path(dir, scene_hash, key);
     let expected = Expected {
         key,
-        sample_rate_hz: request.sample_rate_hz,
+        sample_rate_hz: entry_request.sample_rate_hz,
         slot_count: scene.grid.len() + scene.actuators.len(),
         actuator_count: scene.actuators.len(),
     };
-    let lookup = || entry_file::lookup(&path, &expected, request, options.threads);
+    let lookup = || entry_file::lookup(&path, &expected, request, target, options.threads);
     let model = match lookup()? {
         Lookup::Hit(hit) => return Ok(hit),
         // A sound entry holds every point the model can answer: computing the request says what is wrong with it.
@@ -100,14 +165,14 @@ pub fn greens_functions(
     if let Lookup::Hit(hit) = lookup()? {
         return Ok(hit);
     }
-    let entry = match model.greens_entry(request) {
+    let entry = match model.greens_entry(entry_request) {
         Ok(entry) => entry,
         Err(PlateError::TooLarge { .. }) => return model.greens_functions(request),
         Err(e) => return Err(e),
     };
     entry_file::write(&path, key, &entry)?;
     drop(claim);
-    match entry.cut(request, options.threads)? {
+    match entry.cut(request, target, options.threads)? {
         Some(greens) => Ok(greens),
         None => model.greens_functions(request),
     }
@@ -255,7 +320,7 @@ mod tests {
                 });
             }
         });
-        let want = stand_in.cut(&request, 1).unwrap().unwrap();
+        let want = stand_in.cut(&request, None, 1).unwrap().unwrap();
         assert_eq!(greens_functions(&scene, &options, &request, Some(&root)).unwrap(), want);
         // Only the entry is left: every temporary name was renamed away.
         assert_eq!(fs::read_dir(&root).unwrap().count(), 1);
@@ -278,7 +343,11 @@ mod tests {
             });
             greens_functions(&scene, &options, &request, Some(&root)).unwrap()
         });
-        assert_eq!(got, stand_in.cut(&request, 1).unwrap().unwrap(), "loaded the holder's entry, not computed its own");
+        assert_eq!(
+            got,
+            stand_in.cut(&request, None, 1).unwrap().unwrap(),
+            "loaded the holder's entry, not computed its own"
+        );
         fs::remove_dir_all(&root).unwrap();
     }
 

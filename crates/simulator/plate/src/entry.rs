@@ -51,7 +51,7 @@ impl Representation {
     }
 
     /// The shorter representation for `plan`.
-    fn shorter(plan: &SpectralPlan) -> Self {
+    pub(crate) fn shorter(plan: &SpectralPlan) -> Self {
         if plan.ir_len <= 2 * plan.bins.len() { Self::ImpulseResponse } else { Self::BandSpectrum }
     }
 }
@@ -99,12 +99,21 @@ impl EntryLayout {
     ///
     /// # Errors
     /// [`PlateError::Dsp`] from the FFT; [`PlateError::NonFiniteResult`].
+    ///
+    /// With a `target` (a plan and its sample rate) the responses are synthesised on that plan instead of the
+    /// entry's own: `Ok(None)` unless the entry holds band spectra at every one of the target's bin frequencies, bit
+    /// for bit (a request at another rate or band whose bins fall on the entry's). The responses then equal
+    /// computing the request alone, bit for bit: the same solves, synthesised by the same code.
+    ///
+    /// # Errors
+    /// [`PlateError::Dsp`] from the FFT; [`PlateError::NonFiniteResult`].
     pub(crate) fn cut(
         &self,
         request: &GreensRequest,
         blocks: &[&[f64]],
+        target: Option<&Target>,
         threads: usize,
-    ) -> Result<GreensFunctions, PlateError> {
+    ) -> Result<Option<GreensFunctions>, PlateError> {
         let per_pair = self.words_per_pair();
         let n_act = request.actuators.len();
         let pair_words = |pair: usize| {
@@ -112,23 +121,39 @@ impl EntryLayout {
             &blocks[p][a * per_pair..(a + 1) * per_pair]
         };
         let n_pairs = request.points.len() * n_act;
-        let data = match self.representation {
-            Representation::ImpulseResponse => (0..n_pairs).flat_map(|pair| pair_words(pair).iter().copied()).collect(),
-            Representation::BandSpectrum => {
-                impulse_responses(&self.plan, self.sample_rate_hz, threads, n_pairs, &|pair, b| {
+        let (plan, sample_rate_hz, data) = match (self.representation, target) {
+            (Representation::ImpulseResponse, None) => {
+                let data = (0..n_pairs).flat_map(|pair| pair_words(pair).iter().copied()).collect();
+                (&self.plan, self.sample_rate_hz, data)
+            }
+            (Representation::ImpulseResponse, Some(_)) => return Ok(None),
+            (Representation::BandSpectrum, _) => {
+                let (plan, rate) = target.map_or((&self.plan, self.sample_rate_hz), |t| (&t.plan, t.sample_rate_hz));
+                let Some(bins) = self.plan.bins_at(plan) else { return Ok(None) };
+                let data = impulse_responses(plan, rate, threads, n_pairs, &|pair, b| {
                     let words = pair_words(pair);
-                    Complex64::new(words[2 * b], words[2 * b + 1])
-                })?
+                    Complex64::new(words[2 * bins[b]], words[2 * bins[b] + 1])
+                })?;
+                (plan, rate, data)
             }
         };
-        Ok(GreensFunctions {
-            sample_rate_hz: self.sample_rate_hz,
-            ir_len: self.plan.ir_len,
+        Ok(Some(GreensFunctions {
+            sample_rate_hz,
+            ir_len: plan.ir_len,
             points: request.points.clone(),
             actuators: request.actuators.clone(),
             data,
-        })
+        }))
     }
+}
+
+/// A frequency grid to synthesise responses on other than an entry's own (see [`EntryLayout::cut`]).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Target {
+    /// The request's own plan.
+    pub plan: SpectralPlan,
+    /// The request's sample rate, Hz.
+    pub sample_rate_hz: f64,
 }
 
 /// An entry in memory: its layout and the blocks of its present slots, in slot order.
@@ -141,11 +166,17 @@ pub(crate) struct GreensEntry {
 }
 
 impl GreensEntry {
-    /// Cuts `request` from the entry; `Ok(None)` when the entry does not [serve](EntryLayout::serves) it.
+    /// Cuts `request` from the entry (on `target`'s plan when given); `Ok(None)` when the entry does not
+    /// [serve](EntryLayout::serves) it or cannot give the target's bins.
     ///
     /// # Errors
     /// As [`EntryLayout::cut`].
-    pub(crate) fn cut(&self, request: &GreensRequest, threads: usize) -> Result<Option<GreensFunctions>, PlateError> {
+    pub(crate) fn cut(
+        &self,
+        request: &GreensRequest,
+        target: Option<&Target>,
+        threads: usize,
+    ) -> Result<Option<GreensFunctions>, PlateError> {
         if !self.layout.serves(request) {
             return Ok(None);
         }
@@ -159,7 +190,7 @@ impl GreensEntry {
         let words = self.layout.block_words();
         let blocks: Vec<&[f64]> =
             request.points.iter().map(|&p| &self.data[rank[p] * words..(rank[p] + 1) * words]).collect();
-        self.layout.cut(request, &blocks, threads).map(Some)
+        self.layout.cut(request, &blocks, target, threads)
     }
 }
 

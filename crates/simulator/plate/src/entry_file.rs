@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use metaplate_dsp::fft;
 
-use crate::entry::{EntryLayout, GreensEntry, Representation};
+use crate::entry::{EntryLayout, GreensEntry, Representation, Target};
 use crate::error::PlateError;
 use crate::greens::{GreensFunctions, GreensRequest, MAX_IR_SAMPLES, SpectralPlan};
 
@@ -188,7 +188,8 @@ fn read_header(file: &mut fs::File, expected: &Expected) -> std::io::Result<Opti
 }
 
 /// Looks `request` up in the entry file at `path`: reads the header, then only the blocks of the request's points
-/// (one seek each), and cuts the request from them (spectra synthesised on `threads` threads).
+/// (one seek each), and cuts the request from them (spectra synthesised on `threads` threads), on `target`'s plan
+/// when given ([`EntryLayout::cut`]: an entry that cannot give its bins does not serve the request).
 ///
 /// # Errors
 /// [`PlateError::Cache`] when the file exists but cannot be read (not for a damaged one: that is a
@@ -197,6 +198,7 @@ pub(crate) fn lookup(
     path: &Path,
     expected: &Expected,
     request: &GreensRequest,
+    target: Option<&Target>,
     threads: usize,
 ) -> Result<Lookup, PlateError> {
     let mut file = match fs::File::open(path) {
@@ -240,5 +242,5 @@ pub(crate) fn lookup(
     }
     let refs: Vec<&[f64]> =
         request.points.iter().map(|p| slots.binary_search(p).map_or(&[][..], |i| blocks[i].as_slice())).collect();
-    layout.cut(request, &refs, threads).map(Lookup::Hit)
+    Ok(layout.cut(request, &refs, target, threads)?.map_or(Lookup::NotServed, Lookup::Hit))
 }

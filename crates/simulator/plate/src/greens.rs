@@ -172,6 +172,23 @@ impl SpectralPlan {
     }
 }
 
+impl SpectralPlan {
+    /// For each of `other`'s bins, the index of this plan's bin at the same frequency, bit for bit; `None` when one
+    /// has none. Both plans' bins ascend in frequency.
+    pub(crate) fn bins_at(&self, other: &SpectralPlan) -> Option<Vec<usize>> {
+        let mut next = 0;
+        other
+            .bins
+            .iter()
+            .map(|&(_, f, _)| {
+                let found = self.bins[next..].iter().position(|&(_, g, _)| g.to_bits() == f.to_bits())? + next;
+                next = found + 1;
+                Some(found)
+            })
+            .collect()
+    }
+}
+
 impl PlateModel {
     /// Green's functions of this model for `request` (see the module documentation for the frequency grid), the
     /// frequency bins shared among [`crate::ModelOptions::threads`] threads. Deterministic: the same model and request

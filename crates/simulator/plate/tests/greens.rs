@@ -4,7 +4,8 @@
 
 use metaplate_core::scene::Scene;
 use metaplate_plate::{
-    GreensFunctions, GreensRequest, ModelOptions, PlateError, PlateModel, SpectralPlan, cache_key, greens_functions,
+    EntrySettings, GreensFunctions, GreensRequest, ModelOptions, PlateError, PlateModel, SpectralPlan, cache_key,
+    greens_functions, greens_functions_within,
 };
 
 fn small_request(scene: &Scene, duration_s: f64) -> GreensRequest {
@@ -117,6 +118,60 @@ fn every_request_is_cut_from_one_entry_bit_for_bit_as_computed_alone() {
         assert_eq!(only_file(&dir), file);
         std::fs::remove_dir_all(&dir).unwrap();
     }
+}
+
+/// Whether every bin of `request`'s plan lies on one of `entry`'s, at the same frequency bit for bit.
+fn bins_fall_on(model: &PlateModel, request: &GreensRequest, entry: &EntrySettings) -> bool {
+    let bound = |f| model.loss_factor_bound(f);
+    let plan = SpectralPlan::new(request, &bound).unwrap();
+    let entry_request = GreensRequest {
+        band_hz: entry.band_hz,
+        duration_s: entry.duration_s,
+        sample_rate_hz: entry.sample_rate_hz,
+        ..request.clone()
+    };
+    let entry_plan = SpectralPlan::new(&entry_request, &bound).unwrap();
+    plan.bins.iter().all(|&(_, f, _)| entry_plan.bins.iter().any(|&(_, g, _)| g.to_bits() == f.to_bits()))
+}
+
+#[test]
+fn a_request_whose_bins_fall_on_another_entrys_is_cut_from_it_bit_for_bit() {
+    // As the ground truth (2 kHz, 40 to 700 Hz) shares the mock lab's entry (24 kHz, 40 to 800 Hz): here a
+    // narrower band at the entry's rate, whose FFT the same ring-down sets, so its bins are a subset of the entry's.
+    let scene = Scene::builtin("homogeneous").unwrap();
+    let options = ModelOptions { refinement: 1, threads: 2 };
+    let model = PlateModel::from_scene(&scene, &options).unwrap();
+    let entry = EntrySettings { band_hz: (300.0, 400.0), duration_s: 0.05, sample_rate_hz: 24_000.0 };
+    let measured = scene.measured_points();
+    let request = GreensRequest {
+        points: vec![measured[700], measured[40]],
+        actuators: vec![5, 2],
+        band_hz: (300.0, 380.0),
+        duration_s: 0.05,
+        sample_rate_hz: 24_000.0,
+    };
+    assert!(bins_fall_on(&model, &request, &entry), "the test's premise: the request's bins are the entry's");
+    let dir = scratch("within");
+    let direct = model.greens_functions(&request).unwrap();
+    let computed = greens_functions_within(&scene, &options, &request, &entry, Some(&dir)).unwrap();
+    assert_eq!(bits(&computed), bits(&direct), "cut on the request's own plan: as computed alone");
+    assert_eq!(computed.ir_len, direct.ir_len);
+    let file = only_file(&dir);
+    assert_eq!(representation(&file), 1, "the entry holds band spectra");
+    // The entry is the one its own settings key: a request with them is served by the same file.
+    let own = GreensRequest { band_hz: entry.band_hz, ..request.clone() };
+    let from_entry = greens_functions(&scene, &options, &own, Some(&dir)).unwrap();
+    assert_eq!(bits(&from_entry), bits(&model.greens_functions(&own).unwrap()));
+    let loaded = greens_functions_within(&scene, &options, &request, &entry, Some(&dir)).unwrap();
+    assert_eq!(bits(&loaded), bits(&direct), "and again from the file");
+    assert_eq!(only_file(&dir), file, "no second entry");
+    // Bins that do not fall on the entry's (a duration that sets a longer FFT): an entry of the request's own.
+    let other = GreensRequest { duration_s: 0.5, ..request };
+    assert!(!bins_fall_on(&model, &other, &entry), "the premise: another grid");
+    let got = greens_functions_within(&scene, &options, &other, &entry, Some(&dir)).unwrap();
+    assert_eq!(bits(&got), bits(&model.greens_functions(&other).unwrap()));
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2, "the entry and the request's own");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
