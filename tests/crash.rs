@@ -16,9 +16,9 @@ use std::time::{Duration, Instant};
 use metaplate_core::rng::SplitMix64;
 use metaplate_store::Dataset;
 
-/// The scan under test: 4 x 3 points of the metamaterial grid (all on the plate), the quick protocol, seed 5.
-const SCAN: &[&str] =
-    &["scan", "--scene", "metamaterial", "--protocol", "quick", "--grid", "4x3", "--seed", "5", "--uncalibrated"];
+/// The scan under test: 4 x 3 points of the metamaterial grid (all on the plate), the quick protocol, the scene's own
+/// seed.
+const SCAN: &[&str] = &["scan", "--scene", "metamaterial", "--protocol", "quick", "--grid", "4x3", "--uncalibrated"];
 /// Milliseconds each commit pauses between its batch file's rename and its journal line (the store's test hook):
 /// long against a point's acquisition in fast-forward (about 0.15 s in the debug profile), so that a good share of
 /// random kills land inside a commit.
@@ -31,9 +31,9 @@ fn cache_dir() -> PathBuf {
     dir
 }
 
-/// The calibration under test: the metamaterial scene's 8 actuators, seed 5 (one Green's-function request with the
-/// scan's and `recipes.rs`'s, so the cache serves all of them).
-const CALIBRATE: &[&str] = &["calibrate", "--scene", "metamaterial", "--seed", "5"];
+/// The calibration under test: the metamaterial scene's 8 actuators, the scene's own seed (one Green's-function request
+/// with the scan's and `recipes.rs`'s, so the cache serves all of them).
+const CALIBRATE: &[&str] = &["calibrate", "--scene", "metamaterial"];
 const CALIBRATE_KILLS: usize = 6;
 
 fn command(args: &[&str], out: &Path, resume: bool, commit_pause_ms: u64) -> Command {

@@ -1,5 +1,6 @@
 //! `metaplate experiment run` on the metamaterial scene's mock lab, over the calibration and 3 x 2 scan of
-//! tests/play.rs (seed 5; Green's functions cached under the target directory, shared with the other tests).
+//! tests/play.rs (the scene's own seed; Green's functions cached under the target directory, shared with the other
+//! tests).
 //!
 //! The scan's six points are 8 cm apart, too coarse for the built-ins' fingertips 3.2 cm apart (refused: two pixels
 //! would share a point), so most sessions run a small experiment whose pixels are three of the scan's points; the

@@ -1,6 +1,7 @@
 //! `metaplate play` on the metamaterial scene's mock lab: a calibration and a 3 x 2 scan through it (the scan of
-//! tests/recipes.rs, seed 5; Green's functions cached under the target directory, shared with the other tests),
-//! then patterns played with the onset measured on the loopback, a clipping level and an off-plate pixel refused.
+//! tests/recipes.rs, the scene's own seed; Green's functions cached under the target directory, shared with the other
+//! tests), then patterns played with the onset measured on the loopback, a clipping level and an off-plate pixel
+//! refused.
 
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
@@ -24,8 +25,6 @@ fn play(extra: &[&str]) -> Output {
         cal.to_str().unwrap(),
         "--scene",
         "metamaterial",
-        "--seed",
-        "5",
     ];
     args.extend(extra);
     metaplate(&args)

@@ -23,8 +23,8 @@ pub fn metaplate(args: &[&str]) -> Output {
         .unwrap()
 }
 
-/// A calibration (`calibrate --seed 5`) and two quick scans through it (`scan --protocol quick --seed 5`) on the
-/// metamaterial scene's mock lab, written into `dir` (as `cal`, `scan` and `scan-7x5`):
+/// A calibration (`calibrate`) and two quick scans through it (`scan --protocol quick`), with the scene's own seed,
+/// on the metamaterial scene's mock lab, written into `dir` (as `cal`, `scan` and `scan-7x5`):
 /// - `scan`, `--grid 3x2`: the small scan the play and experiment tests render on (points at x -0.08, 0, 0.08 m
 ///   and y -0.03, 0.03 m);
 /// - `scan-7x5`: fine enough for the built-in experiments' fingertips (x -0.1 to 0.1 m in steps of 1/30 m, so
@@ -34,7 +34,7 @@ pub fn metaplate(args: &[&str]) -> Output {
 /// Returns (calibration, 3 x 2 scan).
 pub fn calibration_and_scan_3x2(dir: &Path) -> (PathBuf, PathBuf) {
     let cal = dir.join("cal");
-    let out = metaplate(&["calibrate", "--scene", "metamaterial", "--seed", "5", "--out", cal.to_str().unwrap()]);
+    let out = metaplate(&["calibrate", "--scene", "metamaterial", "--out", cal.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     for (grid, name) in [("3x2", "scan"), ("7x5", "scan-7x5")] {
         let out = metaplate(&[
@@ -45,8 +45,6 @@ pub fn calibration_and_scan_3x2(dir: &Path) -> (PathBuf, PathBuf) {
             "quick",
             "--grid",
             grid,
-            "--seed",
-            "5",
             "--calibration",
             cal.to_str().unwrap(),
             "--out",
