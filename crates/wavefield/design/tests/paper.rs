@@ -2,7 +2,7 @@
 //! published figures: f_n = 781 Hz and the slow branch's top at 558 Hz within 5 %, its phase velocity under
 //! 10 m/s, its wavelengths 10 cm at 75 Hz and 1.1 cm at its top (558 Hz in the paper) within 10 %.
 
-use metaplate_design::{BandOptions, Design, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
+use metaplate_design::{BandOptions, Design, PAPER_WAVELENGTH_FREQS_HZ, band_diagram, band_figure};
 
 #[test]
 fn paper_design_meets_the_papers_figures() {
@@ -25,6 +25,13 @@ fn paper_design_meets_the_papers_figures() {
     // The slow branch is the rocking rod's: almost all of its kinetic energy is the resonator's away from Gamma.
     let x = &band.branches[0].points[band.path.iter().position(|p| p.path_position >= 1.0).unwrap()];
     assert!(x.plate_energy_share < 0.1, "plate share at X {}", x.plate_energy_share);
+    // Fig. 2C-D: c(f) and lambda(f) along Gamma-X, one value per frequency (frequency rises from Gamma to X on
+    // both branches), not the path's legs drawn over each other.
+    let figure = band_figure(&design, &band);
+    for curve in figure.phase_velocity.iter().chain(&figure.wavelength) {
+        assert!(curve.points.len() > 5, "{}: {} points", curve.label, curve.points.len());
+        assert!(curve.points.windows(2).all(|w| w[1].0 > w[0].0), "{}: frequency rises along Gamma-X", curve.label);
+    }
     eprintln!(
         "paper: f_n {f_n:.1} Hz, top {:.1} Hz, c max {:.2} m/s, lambda(75 Hz) {:.2} cm, lambda(top) {:.2} cm",
         slow.top_hz,
