@@ -97,9 +97,6 @@ impl EntryLayout {
     /// Cuts `request` (which the entry [serves](Self::serves)) from the blocks: `blocks[i]` is the block of
     /// `request.points[i]`. Impulse responses are copied; spectra are synthesised on `threads` threads.
     ///
-    /// # Errors
-    /// [`PlateError::Dsp`] from the FFT; [`PlateError::NonFiniteResult`].
-    ///
     /// With a `target` (a plan and its sample rate) the responses are synthesised on that plan instead of the
     /// entry's own: `Ok(None)` unless the entry holds band spectra at every one of the target's bin frequencies, bit
     /// for bit (a request at another rate or band whose bins fall on the entry's). The responses then equal
