@@ -5,14 +5,15 @@ use metaplate_figures::{BandFigure, Curve};
 use crate::band::{BandDiagram, BranchPoint};
 use crate::spec::Design;
 
-/// Where Gamma-X ends on the path ([`crate::band::PathPoint::path_position`], units of pi/a: X at 1), with room for
+/// Where Gamma-X-M ends on the path ([`crate::band::PathPoint::path_position`], units of pi/a: M at 2), with room for
 /// rounding.
-const GAMMA_X_END: f64 = 1.0 + 1e-9;
+const M_END: f64 = 2.0 + 1e-9;
 
 /// The paper's Fig. 2B-D: the first five branches with the folded A0 and f_n, up to 1.5 times the top of m = 2 (the
 /// slow branch and its partner stay legible; the rod's higher modes are kHz above); c(f) and lambda(f) of m = 1, 2
-/// along Gamma-X (one value per frequency: over the whole path each branch passes its frequencies two or three
-/// times) with the analytic A0's.
+/// walking from Gamma along Gamma-X-M while the frequency rises (one value per frequency, as the slow branch's
+/// wavelengths are read: over the whole path each branch passes its frequencies two or three times; m = 1 reaches
+/// its top at M) with the analytic A0's.
 pub fn band_figure(design: &Design, band: &BandDiagram) -> BandFigure {
     let position = |i: usize| band.path[i].path_position;
     let f_max = band.branches.iter().take(2).flat_map(|b| b.points.iter().map(|p| p.freq_hz)).fold(0.0, f64::max);
@@ -65,7 +66,13 @@ pub fn band_figure(design: &Design, band: &BandDiagram) -> BandFigure {
                 points: b
                     .points
                     .iter()
-                    .filter(|p| band.path[p.path_index].path_position <= GAMMA_X_END)
+                    .take_while(|p| band.path[p.path_index].path_position <= M_END)
+                    .scan(f64::NEG_INFINITY, |last_hz, p| {
+                        (p.freq_hz >= *last_hz).then(|| {
+                            *last_hz = p.freq_hz;
+                            p
+                        })
+                    })
                     .filter_map(|p| value(p).map(|v| (p.freq_hz, v)))
                     .collect(),
             })
