@@ -3,25 +3,14 @@
 
 #![allow(clippy::unwrap_used)] // helpers outside #[test] functions unwrap too: a failure is a failed test
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use crate::common::{self, metaplate_bare as metaplate};
+use std::path::Path;
 
 use serde_json::Value;
 
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("analyze-cli").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn analyze_prints_the_paper_quantities_and_writes_figures() {
-    let dir = scratch("meta13x7");
+    let dir = common::scratch("analyze-cli", "meta13x7");
     let data = dir.join("data");
     // A 13 x 7 subset (83 measured points) of the metamaterial plate: enough for every analysis but the 3.5 cm
     // domain, which holds fewer points than actuators on so sparse a grid.
@@ -112,7 +101,7 @@ fn analyze_prints_the_paper_quantities_and_writes_figures() {
 
 #[test]
 fn analyze_refuses_a_directory_that_is_not_a_dataset() {
-    let dir = scratch("empty");
+    let dir = common::scratch("analyze-cli", "empty");
     let out = metaplate(&["analyze", "--data", dir.to_str().unwrap(), "--json"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("opening dataset"));

@@ -3,19 +3,7 @@
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("metaplate-cli-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use crate::common::{self, metaplate_bare as metaplate};
 
 #[test]
 fn scene_list_and_show() {
@@ -30,7 +18,7 @@ fn scene_list_and_show() {
 
 #[test]
 fn a_bad_scene_file_is_a_clear_error_not_a_panic() {
-    let dir = scratch("bad-scene");
+    let dir = common::scratch("commands-cli", "bad-scene");
     let path = dir.join("bad.toml");
     let good = String::from_utf8(metaplate(&["scene", "show", "metamaterial"]).stdout).unwrap();
     std::fs::write(&path, good.replacen("thickness_m", "thickness_mm", 1)).unwrap();
@@ -43,7 +31,7 @@ fn a_bad_scene_file_is_a_clear_error_not_a_panic() {
 
 #[test]
 fn sweep_then_deconvolve_recovers_a_unit_impulse() {
-    let dir = scratch("sweep");
+    let dir = common::scratch("commands-cli", "sweep");
     let sweep = dir.join("sweep.wav");
     let ir = dir.join("ir.wav");
     assert!(metaplate(&["sweep", "--out", sweep.to_str().unwrap(), "--duration-s", "1"]).status.success());
@@ -69,7 +57,7 @@ fn sweep_then_deconvolve_recovers_a_unit_impulse() {
 
 #[test]
 fn deconvolve_without_excitation_or_reference_is_refused() {
-    let dir = scratch("no-ref");
+    let dir = common::scratch("commands-cli", "no-ref");
     let sweep = dir.join("sweep.wav");
     assert!(metaplate(&["sweep", "--out", sweep.to_str().unwrap(), "--duration-s", "0.5"]).status.success());
     let out = metaplate(&["deconvolve", "--recording", sweep.to_str().unwrap(), "--out", "x.wav"]);
@@ -79,7 +67,7 @@ fn deconvolve_without_excitation_or_reference_is_refused() {
 
 #[test]
 fn simulate_greens_writes_a_dataset_the_store_reads() {
-    let dir = scratch("greens").join("gt");
+    let dir = common::scratch("commands-cli", "greens").join("gt");
     // A coarse lattice and a short, high band keep this test to seconds; the physics is tested in the plate crate.
     let out = metaplate(&[
         "simulate",
@@ -160,7 +148,7 @@ fn devices_lists_every_backend_and_drafts_a_hardware_file_that_parses() {
         }
     }
 
-    let dir = scratch("devices");
+    let dir = common::scratch("commands-cli", "devices");
     let draft = dir.join("rig.toml");
     let out = metaplate(&["devices", "--write-hardware", draft.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

@@ -1,23 +1,13 @@
 //! `metaplate design band`: the paper's cell end to end (table, JSON schema, Parquet, figures) and a design file's
 //! mistake reported with file, line and key.
 
+use crate::common::{self, metaplate_bare as metaplate};
 use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("metaplate-design-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::process::Command;
 
 #[test]
 fn design_band_paper_json_parquet_and_figures() {
-    let dir = scratch("band");
+    let dir = common::scratch("design-cli", "band");
     let parquet = dir.join("points.parquet");
     let figures = dir.join("figures");
     let out = metaplate(&[
@@ -74,7 +64,7 @@ fn design_band_paper_json_parquet_and_figures() {
 
 #[test]
 fn design_file_mistake_names_file_line_and_key() {
-    let dir = scratch("file");
+    let dir = common::scratch("design-cli", "file");
     let path = dir.join("cell.toml");
     std::fs::write(
         &path,
@@ -117,7 +107,7 @@ fn computed_indices(stdout: &[u8]) -> Vec<u64> {
 
 #[test]
 fn four_shards_as_separate_processes_merge_to_one_runs_results() {
-    let dir = scratch("shards");
+    let dir = common::scratch("design-cli", "shards");
     let search = coarse_search(&dir, 4, 7);
     let whole = dir.join("whole");
     let out = metaplate(&["design", "search", search.to_str().unwrap(), "--out", whole.to_str().unwrap()]);
@@ -172,7 +162,7 @@ fn four_shards_as_separate_processes_merge_to_one_runs_results() {
 /// the first had not written (none lost, none computed twice), and the results equal an uninterrupted run's.
 #[test]
 fn a_search_killed_with_sigkill_resumes_without_repeating_or_losing_a_design() {
-    let dir = scratch("kill");
+    let dir = common::scratch("design-cli", "kill");
     // Enough wave vectors that a design takes tens of milliseconds: the kill lands mid-run.
     let search = coarse_search(&dir, 8, 60);
     let reference = dir.join("reference");

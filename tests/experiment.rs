@@ -4,16 +4,13 @@
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
 
+use crate::common::metaplate_bare as metaplate;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 use metaplate_experiment::journal::TrialRecord;
 use metaplate_experiment::{Entry, FieldAtPixels, Plan, Session, SimParticipant, builtin};
 use serde_json::Value;
-
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
-}
 
 /// Runs a whole session of `experiment` in `dir` with a simulated participant answering a field of the given
 /// contrast; returns the number of correct scored answers.

@@ -4,19 +4,9 @@
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
 
+use crate::common::{self, metaplate_bare as metaplate};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("metaplate-focus-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::process::Output;
 
 /// The 13 x 7 metamaterial dataset (Green's functions cached under the target directory, so reruns are quick).
 fn dataset(dir: &Path) -> PathBuf {
@@ -45,7 +35,7 @@ fn dataset(dir: &Path) -> PathBuf {
 
 #[test]
 fn focus_writes_a_normalised_eight_channel_drive_and_refuses_bad_pixels() {
-    let dir = scratch("drive");
+    let dir = common::scratch("focus-cli", "drive");
     let data = dataset(&dir);
     let wav = dir.join("drive.wav");
     let field = dir.join("field.json");
@@ -135,7 +125,7 @@ fn wav_channels(path: &Path) -> Vec<Vec<f32>> {
 
 #[test]
 fn focus_applies_a_recipe_calibration_and_refuses_a_dataset_that_is_not_one() {
-    let dir = scratch("calibrated");
+    let dir = common::scratch("focus-cli", "calibrated");
     let data = dataset(&dir);
     let cal = calibration(&dir);
     let (plain, compensated) = (dir.join("plain.wav"), dir.join("compensated.wav"));
@@ -173,7 +163,7 @@ fn focus_applies_a_recipe_calibration_and_refuses_a_dataset_that_is_not_one() {
 
 #[test]
 fn a_pixel_off_the_plate_or_in_a_gap_is_a_clear_error() {
-    let dir = scratch("bad");
+    let dir = common::scratch("focus-cli", "bad");
     let data = dataset(&dir);
     let wav = dir.join("drive.wav");
     for (pixel, message) in [("0.5,0", "off the plate"), ("0.011,0", "nearest measured point"), ("0,x", "not a number")]

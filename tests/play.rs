@@ -1,22 +1,31 @@
 //! `metaplate play` on the metamaterial scene's mock lab: a calibration and a 3 x 2 scan through it (the scan of
 //! tests/recipes.rs, the scene's own seed; Green's functions cached under the target directory, shared with the other
 //! tests), then patterns played with the onset measured on the loopback, a clipping level and an off-plate pixel
-//! refused.
+//! refused; the same scan on scattered points (points on no lattice, as an import of a scan mesh places them) plays
+//! as on its grid, and a measurement that is no scan through a calibration is refused by its unit.
 
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
 
 use crate::common;
 
+use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use common::metaplate;
 use metaplate_core::scene::Scene;
+use metaplate_store::{Dataset, DatasetWriter, IfExists, IrRecord, ScatteredPoints};
 use serde_json::Value;
 
 /// `metaplate play` on the metamaterial mock lab with `extra` arguments.
 fn play(extra: &[&str]) -> Output {
-    let (cal, scan) = common::calibrated_scan();
+    let (_, scan) = common::calibrated_scan();
+    play_on(&scan, extra)
+}
+
+/// `metaplate play` of the dataset `scan` through the shared calibration on the metamaterial mock lab.
+fn play_on(scan: &Path, extra: &[&str]) -> Output {
+    let (cal, _) = common::calibrated_scan();
     let mut args = vec![
         "play",
         "--data",
@@ -115,4 +124,125 @@ fn a_hardware_file_goes_through_the_registry() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("LDV") || stderr.contains("backend"), "{stderr}");
     assert!(out.stdout.is_empty(), "{}", String::from_utf8_lossy(&out.stdout));
+}
+
+/// Each point of the 3 x 2 scan (in the order of their grid indices) moved by up to 2.2 mm, no two by the same
+/// step: on no lattice.
+const MOVED_MM: [(f64, f64); 6] = [(1.5, -0.8), (-2.0, 1.1), (0.7, 2.2), (-1.1, -1.9), (2.2, 0.4), (-0.4, -1.3)];
+
+/// A point of the scan: its grid index, and its moved position (x, y), m.
+type MovedPoint = (u32, (f64, f64));
+
+/// The 3 x 2 scan written again as scattered points 0 to 5 (its points in the order of their grid indices, each
+/// moved by [`MOVED_MM`]), every response, unit and calibration as they were: what an import of the scan with the
+/// positions a camera measured holds. Returns the dataset and each point's grid index and moved position.
+fn scattered_scan(scan: &Path) -> (PathBuf, Vec<MovedPoint>) {
+    let original = Dataset::open(scan).unwrap();
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("play-scattered").join(std::process::id().to_string());
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let grid = original.manifest().meta.grid;
+    let points: Vec<MovedPoint> = original
+        .points()
+        .iter()
+        .zip(MOVED_MM)
+        .map(|(&p, (dx, dy))| {
+            let (x, y) = grid.position_m(p as usize);
+            (p, (x + dx * 1e-3, y + dy * 1e-3))
+        })
+        .collect();
+    assert_eq!(points.len(), 6);
+    let positions_m: Vec<(f64, f64)> = points.iter().map(|&(_, at)| at).collect();
+    let frame = "the scan's frame, points moved as a camera placed them (a test)".to_owned();
+    let meta = original.manifest().meta.clone().with_scattered(ScatteredPoints { positions_m, frame });
+    let out = dir.join("scattered");
+    let mut writer = DatasetWriter::create(&out, meta, IfExists::Refuse).unwrap();
+    let rows: Vec<IrRecord> = original
+        .rows()
+        .iter()
+        .map(|m| {
+            let index = points.iter().position(|&(p, _)| p == m.point_index).unwrap();
+            let mut meta = *m;
+            (meta.point_index, meta.ix, meta.iy) = (index as u32, index as u32, 0);
+            (meta.x_m, meta.y_m) = points[index].1;
+            IrRecord { meta, ir: original.ir(m.point_index, m.actuator).unwrap().to_vec() }
+        })
+        .collect();
+    writer.commit_batch(&rows).unwrap();
+    writer.finish().unwrap();
+    (out, points)
+}
+
+#[test]
+fn a_scan_on_scattered_points_plays_as_on_its_grid() {
+    let (_, scan) = common::calibrated_scan();
+    let (scattered, points) = scattered_scan(&scan);
+    let json = |out: Output| -> Value {
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    // Two of the points: (0, -0.03) and (0.08, 0.03), asked at their grid positions on the grid, at their moved
+    // ones on the scattered points.
+    let on_grid = json(play_on(&scan, &["--pixel", "0,-0.03", "--pixel", "0.08,0.03:null", "--json"]));
+    let chosen: Vec<usize> = (0..2)
+        .map(|i| {
+            let p = on_grid["pixels"][i]["point_index"].as_u64().unwrap();
+            points.iter().position(|&(q, _)| u64::from(q) == p).unwrap()
+        })
+        .collect();
+    let (a, b) = (points[chosen[0]].1, points[chosen[1]].1);
+    let pixels = [format!("{},{}", a.0, a.1), format!("{},{}:null", b.0, b.1)];
+    let on_points = json(play_on(&scattered, &["--pixel", &pixels[0], "--pixel", &pixels[1], "--json"]));
+
+    // The same points, now at their moved positions; the same responses and filters give the same drives, so the
+    // same predicted peaks (1e-12 relative allows a different summation order, nothing more).
+    for (i, &index) in chosen.iter().enumerate() {
+        let (grid, scattered) = (&on_grid["pixels"][i], &on_points["pixels"][i]);
+        assert_eq!(scattered["point_index"], index, "{on_points}");
+        let (x, y) = points[index].1;
+        let (got_x, got_y) = (scattered["x_m"].as_f64().unwrap(), scattered["y_m"].as_f64().unwrap());
+        assert!((got_x - x).abs() < 1e-12 && (got_y - y).abs() < 1e-12, "{on_points}");
+        let (want, got) =
+            (grid["predicted_peak_mm_s"].as_f64().unwrap(), scattered["predicted_peak_mm_s"].as_f64().unwrap());
+        assert!(
+            (want - got).abs() <= 1e-12 * want.abs().max(1e-9),
+            "pixel {i}: {want} mm/s on the grid, {got} on the points"
+        );
+    }
+    assert!(on_points["pixels"][0]["predicted_peak_mm_s"].as_f64().unwrap() > 1.0, "{on_points}");
+    assert_eq!(on_points["clip_margin_db"], on_grid["clip_margin_db"]);
+
+    // 3 mm beside a moved point the pixel snaps to it. Amid four points (48 mm from the nearest, whose cell
+    // reaches 0.71 of its 59 mm to its neighbour, 42 mm) it is refused by its distance.
+    let near = format!("{},{}", a.0 + 0.003, a.1);
+    let snapped = json(play_on(&scattered, &["--pixel", &near, "--json"]));
+    assert_eq!(snapped["pixels"][0]["point_index"], chosen[0], "{snapped}");
+    let out = play_on(&scattered, &["--pixel", "0.04,0"]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("pixel (0.04, 0) is 48.") && stderr.contains("outside the scattered points"), "{stderr}");
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn a_measurement_that_is_no_scan_through_a_calibration_is_refused_by_its_unit() {
+    // Another tool's accelerance FRF (a public file of the import corpus), imported: velocity per newton, on a plate
+    // metaplate does not know. Refused by the unit (the reason that holds on any rig) before anything is opened,
+    // pointing to `focus`.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("play-import").join(std::process::id().to_string());
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let nodes = dir.join("nodes.csv");
+    std::fs::write(&nodes, "node,x_m,y_m\n0,0.0,-0.03\n").unwrap();
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../interchange/tests/corpus/non_ascii_header.uff");
+    let data = dir.join("imported");
+    let args = ["import", "--uff", file, "--nodes", nodes.to_str().unwrap(), "--out", data.to_str().unwrap()];
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = play_on(&data, &["--pixel", "0,-0.03"]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("impulse responses are in `m/s/N`") && stderr.contains("metaplate focus"), "{stderr}");
+    assert!(!stderr.contains("plate `uff-import`"), "{stderr}");
+    assert!(out.stdout.is_empty());
 }

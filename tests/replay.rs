@@ -4,19 +4,7 @@
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("metaplate-cli-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use crate::common::{self, metaplate_bare as metaplate};
 
 fn record(dir: &std::path::Path, device: &str) -> String {
     let path = dir.join(format!("{device}.cassette")).to_str().unwrap().to_owned();
@@ -43,7 +31,7 @@ fn record_index(path: &str, needle: &str) -> usize {
 
 #[test]
 fn an_ldv_session_replays_clean_and_absorbs_a_timeout() {
-    let dir = scratch("replay-ldv");
+    let dir = common::scratch("replay-cli", "replay-ldv");
     let path = record(&dir, "ldv");
     let (ok, clean) = replay_json(&[&path]);
     assert!(ok, "{clean}");
@@ -67,7 +55,7 @@ fn an_ldv_session_replays_clean_and_absorbs_a_timeout() {
 
 #[test]
 fn a_daq_session_replays_with_a_dropped_packet_reported() {
-    let dir = scratch("replay-daq");
+    let dir = common::scratch("replay-cli", "replay-daq");
     let path = record(&dir, "daq");
     let (ok, clean) = replay_json(&[&path]);
     assert!(ok, "{clean}");
@@ -97,7 +85,7 @@ fn a_daq_session_replays_with_a_dropped_packet_reported() {
 
 #[test]
 fn damaged_cassettes_and_bad_faults_are_clear_errors() {
-    let dir = scratch("replay-bad");
+    let dir = common::scratch("replay-cli", "replay-bad");
     let path = record(&dir, "ldv");
     let bytes = std::fs::read(&path).unwrap();
     let cut = dir.join("cut.cassette");

@@ -9,9 +9,9 @@
 #![allow(clippy::unwrap_used)]
 
 use crate::browser;
+use crate::common::metaplate_bare as metaplate;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use browser::{colours, screenshot};
 
@@ -21,10 +21,6 @@ const SCAN: &[&str] = &["--scene", "metamaterial", "--protocol", "quick", "--gri
 
 fn cache_dir() -> PathBuf {
     Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache")
-}
-
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
 }
 
 fn text(bytes: &[u8]) -> String {

@@ -5,17 +5,14 @@
 
 #![allow(clippy::unwrap_used)] // helpers outside #[test] functions unwrap too: a failure is a failed test
 
+use crate::common::{self, metaplate_bare as metaplate};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::OnceLock;
 
 use metaplate_store::Dataset;
 use metaplate_uff::{FunctionType, UffDecoder, UffEncoder, UffRecord};
 use serde_json::Value;
-
-fn metaplate(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
-}
 
 fn ok(args: &[&str]) -> Output {
     let out = metaplate(args);
@@ -23,21 +20,12 @@ fn ok(args: &[&str]) -> Output {
     out
 }
 
-/// A fresh directory of this test process's own: under cargo-nextest every test is a process, so two tests'
-/// `original()` must not share (and replace) one directory.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("uff-cli").join(std::process::id().to_string()).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// The 13 x 7 metamaterial ground truth, simulated once per test process (its Green's functions cached under the
 /// target directory, as the other command tests do, so a second process loads them).
 fn original() -> &'static Path {
     static DATA: OnceLock<PathBuf> = OnceLock::new();
     DATA.get_or_init(|| {
-        let data = scratch("original").join("gt");
+        let data = common::scratch("uff-cli", "original").join("gt");
         let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
         std::fs::create_dir_all(&cache).unwrap();
         let (d, c) = (data.to_str().unwrap(), cache.to_str().unwrap());
@@ -74,7 +62,7 @@ fn assert_same_responses(original: &Dataset, imported: &Dataset, rel: f64, what:
 fn round_trip_in_every_format_reproduces_every_response() {
     let original_path = original();
     let original = Dataset::open(original_path).unwrap();
-    let dir = scratch("round-trip");
+    let dir = common::scratch("uff-cli", "round-trip");
     // (format, precision, byte order, bound on the error relative to a response's peak): ASCII single writes 6
     // significant digits (5e-6 of each value); ASCII double 12 and binary single f32 give the stored f32 back.
     let cases = [
@@ -161,7 +149,7 @@ fn keep_only_frfs(from: &Path, to: &Path, format: &str, precision: &str, byte_or
 #[test]
 fn analyze_on_an_import_equals_analyze_on_the_original() {
     let original_path = original();
-    let dir = scratch("analyze");
+    let dir = common::scratch("uff-cli", "analyze");
     let file = dir.join("gt.uff");
     let back = dir.join("imported");
     ok(&["export", "--data", original_path.to_str().unwrap(), "--format", "uff58b", "--out", file.to_str().unwrap()]);
@@ -188,7 +176,7 @@ fn analyze_on_an_import_equals_analyze_on_the_original() {
 
 #[test]
 fn a_malformed_file_names_the_record_and_line() {
-    let dir = scratch("malformed");
+    let dir = common::scratch("uff-cli", "malformed");
     let file = dir.join("bad.uff");
     // A dataset 58 that ends after its record 6.
     let mut text = String::from("    -1\n    58\n");
@@ -211,7 +199,7 @@ fn corpus(name: &str) -> String {
 
 #[test]
 fn files_other_writers_wrote_import_with_nodes_and_refusals_name_what_would_be_accepted() {
-    let dir = scratch("corpus");
+    let dir = common::scratch("uff-cli", "corpus");
     let nodes = dir.join("nodes.csv");
     std::fs::write(&nodes, "node,x_m,y_m\n0,0.0,0.0\n").unwrap();
     let (nodes, out) = (nodes.to_str().unwrap(), dir.join("catman"));

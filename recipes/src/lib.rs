@@ -58,7 +58,7 @@
 //!                 and measured onset, latency
 //!   prepare.rs    a pattern rendered from a scan through its calibration, checked and ready to play: what
 //!                 `metaplate play` plays and an experiment's stimuli are (`prepare`, `render_through`,
-//!                 `check_same_plate`)
+//!                 `check_playable`)
 //! events.rs       `RunControl` (stop levels, test hooks), `Event` (with `Phase`, `UnitPosition`), `Observer`
 //! progress.rs     `RunProgress`, `EventLine` (the `--json` lines), `RunSummary` (a notification's summary)
 //! notify.rs       `--notify-command`, run once per event, and the watch that notices a stall

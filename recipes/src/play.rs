@@ -24,7 +24,7 @@ use crate::error::RecipeError;
 
 mod prepare;
 pub use prepare::{
-    PixelPrediction, PixelReport, PlayReport, PreparedPattern, SCAN_IR_UNIT, calibration_filters, check_same_plate,
+    PixelPrediction, PixelReport, PlayReport, PreparedPattern, SCAN_IR_UNIT, calibration_filters, check_playable,
     prepare, render_through,
 };
 

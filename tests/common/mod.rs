@@ -23,6 +23,22 @@ pub fn metaplate(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// `metaplate ARGS` as given (for commands that take no cache directory), its output collected, without
+/// backtraces.
+pub fn metaplate_bare(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_metaplate")).args(args).env("RUST_BACKTRACE", "0").output().unwrap()
+}
+
+/// A fresh, empty directory `name` of test file `area`, of this test process's own (under cargo-nextest every test
+/// is a process: two tests must not share, and replace, one directory), under the target's temporary directory so
+/// that `cargo clean` removes it.
+pub fn scratch(area: &str, name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(area).join(std::process::id().to_string()).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
 /// A calibration (`calibrate`) and two quick scans through it (`scan --protocol quick`), with the scene's own seed,
 /// on the metamaterial scene's mock lab, written into `dir` (as `cal`, `scan` and `scan-7x5`):
 /// - `scan`, `--grid 3x2`: the small scan the play and experiment tests render on (points at x -0.08, 0, 0.08 m

@@ -10,7 +10,7 @@ use metaplate_experiment::console::ChannelConsole;
 use metaplate_experiment::runner::{Responder, SessionOutput, SessionRunner};
 use metaplate_experiment::stimulus::DriveOptions;
 use metaplate_recipes::drive::DRIVE_PEAK_FS;
-use metaplate_recipes::play::check_same_plate;
+use metaplate_recipes::play::check_playable;
 use metaplate_store::Dataset;
 
 use crate::rig::{self, Plate};
@@ -66,12 +66,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let (mut rig, lab, keypad) = match (&args.source.scene, &args.source.hardware) {
         (_, Some(file)) => {
             let (plate, opened) = rig::hardware_rig_and_keypad(file)?;
-            check_same_plate(&dataset, &plate.id)?;
+            check_playable(&dataset, &plate.id)?;
             (opened.rig, None, opened.keypad)
         }
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
-            check_same_plate(&dataset, &plate.id)?;
+            check_playable(&dataset, &plate.id)?;
             // Only the magnets are prepared: nothing is measured at the pixels (the beam rests where it is).
             let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), None, args.cache.dir())?;
             (rig, Some(lab), None)

@@ -7,7 +7,7 @@ use anyhow::{Context, bail};
 use clap::Args;
 use metaplate_control::focus::{PixelSpec, RenderOptions, parse_pixel};
 use metaplate_recipes::drive::DRIVE_PEAK_FS;
-use metaplate_recipes::play::{check_same_plate, prepare};
+use metaplate_recipes::play::{check_playable, prepare};
 use metaplate_store::Dataset;
 
 use crate::rig::{self, Plate};
@@ -54,12 +54,12 @@ pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
     let (plate, mut rig, _lab) = match (&args.source.scene, &args.source.hardware) {
         (_, Some(file)) => {
             let (plate, rig) = rig::hardware_rig(file)?;
-            check_same_plate(&dataset, &plate.id)?;
+            check_playable(&dataset, &plate.id)?;
             (plate, rig, None)
         }
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;
-            check_same_plate(&dataset, &plate.id)?;
+            check_playable(&dataset, &plate.id)?;
             // Only the magnets are prepared: nothing is measured at the pixels (the beam rests where it is).
             let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), args.seed, args.cache.dir())?;
             (plate, rig, Some(lab))

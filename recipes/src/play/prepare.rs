@@ -4,7 +4,7 @@
 //! Refusals (nothing played): a pixel off the plate or in a gap of the scan (control's `pixels`), a drive that would
 //! clip at the level ([`RecipeError::Clipping`]), a dataset that is not a scan in m/s per full-scale drive (the
 //! predicted velocity would have no physical unit), a scan measured through another calibration, a rig of another
-//! plate ([`check_same_plate`]).
+//! plate ([`check_playable`]).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -158,13 +158,7 @@ pub fn prepare(
     wiring: &Wiring,
     level: f64,
 ) -> Result<PreparedPattern, RecipeError> {
-    let unit = dataset.manifest().meta.description.as_ref().map_or("unstated", |d| d.ir_unit.as_str());
-    if unit != SCAN_IR_UNIT {
-        return Err(refused(format!(
-            "the dataset's impulse responses are in `{unit}`, not `{SCAN_IR_UNIT}`: play needs a scan measured \
-             through a calibration, so that a level of full scale has a velocity"
-        )));
-    }
+    check_scan_unit(dataset)?;
     // The responses hold the filters they were measured through: compensating with others would play a pattern
     // the prediction does not describe.
     let scanned_through = dataset.manifest().meta.config.get("calibration").and_then(|v| v.as_str());
@@ -195,11 +189,27 @@ pub fn prepare(
     Ok(PreparedPattern { rendered, playback, pixels })
 }
 
-/// Refuses a rig of another plate than the one `dataset` was measured on (the drives would focus nowhere).
+/// Refuses a dataset whose impulse responses are not in [`SCAN_IR_UNIT`]: without the calibration's filters in
+/// them, a level of full scale has no velocity. An import of another tool's measurement (in m/s/N, say) is one.
+fn check_scan_unit(dataset: &Dataset) -> Result<(), RecipeError> {
+    let unit = dataset.manifest().meta.description.as_ref().map_or("unstated", |d| d.ir_unit.as_str());
+    if unit == SCAN_IR_UNIT {
+        return Ok(());
+    }
+    Err(refused(format!(
+        "the dataset's impulse responses are in `{unit}`, not `{SCAN_IR_UNIT}`: play needs a scan measured through a \
+         calibration, so that a level of full scale has a velocity (`metaplate focus` renders drive signals from any \
+         dataset, for another player)"
+    )))
+}
+
+/// Refuses, before a rig is touched, a dataset that cannot be played on a rig of the plate `rig_plate`: one that is
+/// not a scan through a calibration (its unit), or one measured on another plate (the drives would focus nowhere).
 ///
 /// # Errors
-/// [`RecipeError::PlayRefused`] naming both plates.
-pub fn check_same_plate(dataset: &Dataset, rig_plate: &SceneId) -> Result<(), RecipeError> {
+/// [`RecipeError::PlayRefused`] naming the dataset's unit and the one needed, or both plates.
+pub fn check_playable(dataset: &Dataset, rig_plate: &SceneId) -> Result<(), RecipeError> {
+    check_scan_unit(dataset)?;
     let measured_on = &dataset.manifest().meta.scene;
     if measured_on == rig_plate {
         return Ok(());
