@@ -28,6 +28,10 @@ pub struct ImportArgs {
     /// declared unknown (by default they are refused by name).
     #[arg(long)]
     accept_unknown_quantity: bool,
+    /// Of frequency responses by several estimators for one pair (ID line 2 naming them, as Polytec PSV exports
+    /// H1 and H2), the one to import: H1, H2, H3, Hv or FRF. Default: the first of these the files hold.
+    #[arg(long, value_name = "NAME")]
+    estimator: Option<String>,
 }
 
 /// Runs `metaplate import`.
@@ -37,6 +41,7 @@ pub fn run(args: &ImportArgs) -> anyhow::Result<()> {
         grid_from_nodes: args.grid_from_nodes,
         accept_unknown_quantity: args.accept_unknown_quantity,
         nodes: args.nodes.clone(),
+        estimator: args.estimator.clone(),
     };
     let summary = import(&args.uff, &args.out, options, |p| {
         bar.set_length(p.total);
@@ -55,6 +60,12 @@ pub fn run(args: &ImportArgs) -> anyhow::Result<()> {
         summary.ir_unit,
     );
     eprintln!("ordinate: {}", summary.conversion);
+    if let Some(estimator) = summary.estimator {
+        eprintln!("estimator: {estimator} (of several per pair; the others skipped)");
+    }
+    if let Some(direction) = summary.response_direction {
+        eprintln!("response direction: ±{direction} (along the points' plane normal; the others skipped)");
+    }
     for a in &summary.actuators {
         eprintln!("actuator {}: reference node {} direction {}", a.actuator, a.reference_node, a.direction);
     }

@@ -24,6 +24,12 @@
 //!   FFT of `n = 2 × (index of its last bin)` points at the file's frequency step (the band is the FRF's own,
 //!   from its first to its last frequency, bins outside it zero, no taper; the last bin is taken as Nyquist), so the
 //!   response is `n` samples long at `n × step` Hz, causal from time 0 (`pre_samples` 0).
+//! - **Of several of one kind** for one (point, actuator): frequency responses by several estimators (ID line 2
+//!   naming `H1`, `H2`, ... as Polytec PSV writes them) give the one [`ImportOptions::estimator`] names, else the
+//!   first of [`crate::survey::ESTIMATORS`] present; responses in several directions at one point (a 3-D scan head's
+//!   X, Y and Z) give the one along the axis nearest the points' plane normal, refused when that axis is more than
+//!   [`crate::survey::MAX_AXIS_ANGLE_DEG`] from it. The others are listed as skipped; the choice is printed and
+//!   stored (`config.estimator`, `config.response_direction`).
 //! - **Units by quantity** (`crate::quantity`): velocity as it is, acceleration and displacement converted to
 //!   velocity (÷ or × jω; time records through their FFT), in SI by dataset 164's factors or the units label; any
 //!   other quantity refused by name unless [`ImportOptions::accept_unknown_quantity`]. Every imported response must
@@ -59,6 +65,9 @@ pub struct ImportOptions {
     pub accept_unknown_quantity: bool,
     /// A CSV file of node positions (`node,x_m,y_m[,z_m]`, metres), used in place of (and before) dataset 2411.
     pub nodes: Option<PathBuf>,
+    /// Of frequency responses by several estimators for one pair, the one to import (one of
+    /// [`crate::survey::ESTIMATORS`]); `None`: the first of them present.
+    pub estimator: Option<String>,
 }
 
 /// What an import built.
@@ -87,8 +96,13 @@ pub struct ImportSummary {
     /// Which reference degree of freedom each actuator number stands for (also stored in the dataset).
     pub actuators: Vec<ActuatorRef>,
     /// Records stepped over: datasets not read (geometry, headers) and functions that are not responses
-    /// (coherence, spectra, ...), in file order.
+    /// (coherence, spectra, ...), in file order; then responses not chosen among several of one pair (another
+    /// estimator, another direction).
     pub skipped: Vec<SkippedRecord>,
+    /// The estimator imported where a pair had frequency responses by several.
+    pub estimator: Option<&'static str>,
+    /// The response direction imported where a point had responses in several (1 x, 2 y, 3 z).
+    pub response_direction: Option<i8>,
 }
 
 /// Builds the dataset `out` (which must not exist, or be empty) from the universal files `files`, read in order.
@@ -105,6 +119,11 @@ pub fn import(
     options: ImportOptions,
     mut progress: impl FnMut(Progress),
 ) -> Result<ImportSummary, InterchangeError> {
+    if let Some(name) = &options.estimator
+        && !crate::survey::ESTIMATORS.contains(&name.as_str())
+    {
+        refuse!("--estimator {name}: accepted are {}", crate::survey::ESTIMATORS.join(", "));
+    }
     let survey = survey(files, &options)?;
     let Some(first_ids) = survey.first_ids.clone() else {
         refuse!(
@@ -130,8 +149,9 @@ pub fn import(
         Some(csv) => read_nodes_csv(csv)?,
         None => survey.nodes.iter().map(|(&label, p)| (label, p.map(|v| v / length_per_m))).collect(),
     };
-    let Plan { grid, by_at, grid_from, actuators, placed, frame, scattered } =
+    let Plan { grid, by_at, grid_from, actuators, placed, frame, scattered, not_chosen, estimator, response_direction } =
         plan(files, &survey, &first_ids, &options, &positions_m)?;
+    let skipped: Vec<SkippedRecord> = survey.skipped.iter().cloned().chain(not_chosen).collect();
     // The references' positions in the grid's frame, where a node gives them (for an export without a scene).
     let reference_at = |node: i64| -> Option<(f64, f64)> {
         let p = positions_m.get(&node)?;
@@ -262,7 +282,9 @@ pub fn import(
                     "direction": direction,
                     "position_m": positions_m.get(&node),
                 })).collect::<Vec<_>>(),
-                "skipped": skipped_summary(&survey.skipped),
+                "skipped": skipped_summary(&skipped),
+                "estimator": estimator,
+                "response_direction": response_direction,
             });
             let serde_json::Value::Object(config) = config else {
                 refuse!("internal: configuration is not a JSON object")
@@ -304,7 +326,9 @@ pub fn import(
         ir_unit,
         conversion,
         actuators,
-        skipped: survey.skipped,
+        skipped,
+        estimator,
+        response_direction,
     })
 }
 

@@ -35,7 +35,7 @@ pub use error::InterchangeError;
 pub use export::{ExportOptions, ExportSummary, actuator_sites, default_out, export};
 pub use id_lines::IdLines;
 pub use import::{ImportOptions, ImportSummary, import, skipped_summary};
-pub use survey::{ActuatorRef, ONE_POINT_SPACING_M, SkippedRecord, read_nodes_csv};
+pub use survey::{ActuatorRef, ESTIMATORS, MAX_AXIS_ANGLE_DEG, ONE_POINT_SPACING_M, SkippedRecord, read_nodes_csv};
 
 /// How far an export or import is: `done` of `total` responses (a response: one (point, actuator) pair).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -325,3 +325,144 @@ fn one_point_and_points_on_a_line_are_named_by_analyze() {
     }
     assert!(analysis.driven_response.is_some(), "{:?}", analysis.errors);
 }
+
+/// `records` with each FRF's ID line 2 as PSV writes it for the estimator `estimator`, its ordinate times `scale`.
+fn as_estimate(records: &[UffRecord], estimator: &str, scale: f64) -> Vec<UffRecord> {
+    records
+        .iter()
+        .filter_map(|r| match r {
+            UffRecord::Function(f) => {
+                let mut f = f.clone();
+                f.header.id_lines[1] = format!("Vib  Ref1  {estimator} Velocity / Force");
+                if let Ordinate::Complex(values) = &mut f.ordinate {
+                    values.iter_mut().for_each(|v| *v *= scale);
+                }
+                Some(UffRecord::Function(f))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// The first `points` nodes and FRFs of the synthetic PSV export, and the import of those records into `dir/name`.
+fn import_records(dir: &Path, name: &str, records: &[UffRecord], estimator: Option<&str>) -> Result<PathBuf, String> {
+    let file = dir.join(format!("{name}.uff"));
+    write(&file, records, Format::Ascii);
+    let out = dir.join(name);
+    let options = ImportOptions { estimator: estimator.map(str::to_owned), ..ImportOptions::default() };
+    let summary = common::import(&[file], &out, options).map_err(|e| common::message(&e))?;
+    let rows = summary.rows;
+    let estimate = summary.estimator.map(str::to_owned);
+    let skipped: Vec<String> = summary.skipped.iter().map(|s| s.what.clone()).collect();
+    std::fs::write(
+        out.join("summary.txt"),
+        format!("{rows} {estimate:?} {:?} {skipped:?}", summary.response_direction),
+    )
+    .unwrap();
+    Ok(out)
+}
+
+fn summary_of(out: &Path) -> String {
+    std::fs::read_to_string(out.join("summary.txt")).unwrap()
+}
+
+#[test]
+fn frfs_by_several_estimators_import_the_one_chosen_and_list_the_others() {
+    // As PSV exports H1 and H2 of every point against the reference: each an FRF of the same pair, told apart by
+    // ID line 2 only.
+    let tmp = tempfile::tempdir().unwrap();
+    let base = psv_records(20);
+    let head: Vec<UffRecord> = base.iter().filter(|r| !matches!(r, UffRecord::Function(_))).cloned().collect();
+    let (h1, h2) = (as_estimate(&base, "H1", 1.0), as_estimate(&base, "H2", 1.25));
+    let both: Vec<UffRecord> =
+        head.iter().cloned().chain(h1.iter().zip(&h2).flat_map(|(a, b)| [a.clone(), b.clone()])).collect();
+    let only_h1: Vec<UffRecord> = head.iter().cloned().chain(h1.iter().cloned()).collect();
+
+    let reference = Dataset::open(import_records(tmp.path(), "h1", &only_h1, None).unwrap()).unwrap();
+    // By default the first of H1, H2, ... present: H1, the others listed as skipped.
+    let default = import_records(tmp.path(), "both", &both, None).unwrap();
+    let summary = summary_of(&default);
+    assert!(summary.starts_with("20 Some(\"H1\") None"), "{summary}");
+    assert_eq!(summary.matches("H2 estimate (not chosen: the H1 estimate is imported)").count(), 20, "{summary}");
+    let default = Dataset::open(&default).unwrap();
+    for row in reference.rows() {
+        let (p, a) = row.key();
+        assert_eq!(default.ir(p, a), reference.ir(p, a), "point {p}");
+    }
+    assert_eq!(default.manifest().meta.config["estimator"], "H1");
+
+    // Asked for H2: the responses 1.25 times H1's (to the f32 rounding of the stored values).
+    let h2_data = Dataset::open(import_records(tmp.path(), "h2", &both, Some("H2")).unwrap()).unwrap();
+    for row in reference.rows() {
+        let (p, a) = row.key();
+        for (&x, &y) in reference.ir(p, a).unwrap().iter().zip(h2_data.ir(p, a).unwrap()) {
+            assert!((f64::from(y) - 1.25 * f64::from(x)).abs() <= 1e-6 * f64::from(x).abs().max(1e-3), "point {p}");
+        }
+    }
+
+    // An estimator the files lack, and a name that is none.
+    let why = import_records(tmp.path(), "h3", &both, Some("H3")).unwrap_err();
+    assert!(why.contains("by the estimators H1, H2 (ID line 2), none by H3; --estimator takes one of H1"), "{why}");
+    let why = import_records(tmp.path(), "h5", &both, Some("H5")).unwrap_err();
+    assert!(why.contains("--estimator H5: accepted are H1, H2, H3, Hv, FRF"), "{why}");
+}
+
+/// The synthetic PSV records of `points` points with every FRF given again in directions x and y (the in-plane
+/// components a 3-D scan head measures, a tenth and a fifth of the normal one), the nodes at `place(u, v)`.
+fn three_d(points: usize, place: impl Fn((f64, f64)) -> [f64; 3]) -> (Vec<UffRecord>, Vec<UffRecord>) {
+    let mesh = mesh_in_plane();
+    let mut z_only = psv_records(points);
+    for r in &mut z_only {
+        if let UffRecord::Nodes(nodes) = r {
+            for node in &mut nodes.nodes {
+                let i = node.label as usize - 1;
+                node.position_m = if i < mesh.len() { place(mesh[i]) } else { place(SOURCE) };
+            }
+        }
+    }
+    let mut all = Vec::new();
+    for r in &z_only {
+        all.push(r.clone());
+        if let UffRecord::Function(f) = r {
+            for (direction, scale) in [(1, 0.1), (2, 0.2)] {
+                let mut g = f.clone();
+                g.header.response.direction = direction;
+                if let Ordinate::Complex(values) = &mut g.ordinate {
+                    values.iter_mut().for_each(|v| *v *= scale);
+                }
+                all.push(UffRecord::Function(g));
+            }
+        }
+    }
+    (z_only, all)
+}
+
+#[test]
+fn a_3d_heads_directions_keep_the_plates_normal_or_are_refused_on_a_tilted_plate() {
+    let tmp = tempfile::tempdir().unwrap();
+    // The plate in a plane z = const: the z responses are its normal velocity, x and y listed as skipped.
+    let (z_only, all) = three_d(20, |(u, v)| [u, v, 0.8]);
+    let reference = Dataset::open(import_records(tmp.path(), "z", &z_only, None).unwrap()).unwrap();
+    let out = import_records(tmp.path(), "xyz", &all, None).unwrap();
+    let summary = summary_of(&out);
+    assert!(summary.starts_with("20 None Some(3)"), "{summary}");
+    for direction in [1, 2] {
+        let what = format!("response direction {direction} (not chosen: the plate's normal is ±3)");
+        assert_eq!(summary.matches(&what).count(), 20, "{summary}");
+    }
+    let data = Dataset::open(&out).unwrap();
+    for row in reference.rows() {
+        let (p, a) = row.key();
+        assert_eq!(data.ir(p, a), reference.ir(p, a), "point {p}");
+    }
+    assert_eq!(data.manifest().meta.config["response_direction"], 3);
+
+    // Tilted 3° about x: z is still within 5° of the normal. Tilted 25° (the PSV mesh's plane): refused by name.
+    let tilted = |deg: f64| move |(u, v): (f64, f64)| [u, v * deg.to_radians().cos(), v * deg.to_radians().sin()];
+    let (_, all) = three_d(20, tilted(3.0));
+    assert!(summary_of(&import_records(tmp.path(), "tilt3", &all, None).unwrap()).starts_with("20 None Some(3)"));
+    let (_, all) = three_d(20, tilted(25.0));
+    let why = import_records(tmp.path(), "tilt25", &all, None).unwrap_err();
+    assert!(why.contains("hold responses in the directions 1, 2, 3 (record 6)"), "{why}");
+    assert!(why.contains("is 25.0° from the nearest axis"), "{why}");
+}
