@@ -5,33 +5,21 @@ use std::path::Path;
 use polars::prelude::{LazyFrame, PlRefPath, ScanArgsParquet};
 
 use crate::error::StoreError;
-use crate::journal::{self, Live};
-use crate::manifest::{BATCH_DIR, Manifest};
 use crate::reader::Dataset;
 
 impl Dataset {
-    /// A polars `LazyFrame` scanning the files the journal commits (or, for a dataset written before the journal,
-    /// the manifest lists), in the columns of [`crate::schema`]. Orphans and superseded files in `batches/` are not
-    /// scanned. Nothing is verified here (polars reads the files itself): use [`Dataset::open`] to verify.
+    /// A polars `LazyFrame` scanning the committed files ([`Dataset::committed_files`]), in the columns of
+    /// [`crate::schema`]. Nothing is verified here (polars reads the files itself): use [`Dataset::open`] to verify.
     ///
     /// # Errors
     /// The manifest errors of [`Dataset::open`]; [`StoreError::EmptyDataset`] if nothing is committed;
     /// [`StoreError::Polars`] if polars refuses the scan (for example a path that is not UTF-8).
     pub fn lazy(dir: impl AsRef<Path>) -> Result<LazyFrame, StoreError> {
         let dir = dir.as_ref();
-        let manifest = Manifest::read(dir)?;
-        let files: Vec<String> = match journal::read(dir)? {
-            Some(read) => Live::replay(&read.entries).batches.into_iter().map(|b| b.file).collect(),
-            None => manifest.batches.into_iter().map(|b| b.file).collect(),
-        };
-        if files.is_empty() {
-            return Err(StoreError::EmptyDataset { dir: dir.to_path_buf() });
-        }
         let polars = |reason: String| StoreError::Polars { dir: dir.to_path_buf(), reason };
-        let paths = files
-            .iter()
-            .map(|file| {
-                let path = dir.join(BATCH_DIR).join(file);
+        let paths = Self::committed_files(dir)?
+            .into_iter()
+            .map(|path| {
                 path.to_str().map(PlRefPath::new).ok_or_else(|| polars(format!("{} is not UTF-8", path.display())))
             })
             .collect::<Result<Vec<_>, _>>()?;

@@ -50,8 +50,8 @@
 //!   duplicates, mixed IR lengths or sample rates, and non-finite samples. [`Dataset::stream`] hands over one
 //!   committed file at a time; [`Dataset::committed_keys`] reads the journal alone; [`Dataset::read_batch`] reads
 //!   one committed file, verified against its journal entry (with [`journal::view`], how a follower reads a dataset
-//!   as it grows). With the cargo feature `polars`, `Dataset::lazy` gives a polars `LazyFrame` over the committed
-//!   files.
+//!   as it grows). [`Dataset::committed_files`] lists the committed files for other readers; with the cargo
+//!   feature `polars`, `Dataset::lazy` gives a polars `LazyFrame` over them.
 //! - [`wav`]: [`export_wav`] and [`write_wav_f32`] write 32-bit float multichannel WAV files (impulse responses,
 //!   drive signals); [`read_wav`] reads any WAV file.
 //! - [`write_bytes`]: a small file written durably outside a dataset (an experiment session's plan, for example).
@@ -71,6 +71,7 @@
 
 mod checksum;
 mod codec;
+mod committed;
 mod compact;
 mod durable;
 pub mod error;

@@ -107,19 +107,37 @@ fn the_readme_reading_example_runs() {
     assert!(out.status.success() && stdout.contains("ok"), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
 }
 
-/// `Dataset::lazy` scans exactly the committed files, in the dataset's columns.
-#[cfg(feature = "polars")]
-#[test]
-fn the_polars_lazy_frame_reads_the_committed_rows() {
-    use polars::prelude::{DataType, col, lit};
+/// A dataset of two committed batches (6 rows of 50 samples), and a copy of the first that no journal entry names
+/// (an orphan, which no reader must take).
+fn two_batches_and_an_orphan() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     let mut writer = DatasetWriter::create(dir.path(), meta(), IfExists::Refuse).unwrap();
     writer.commit_batch(&records(&[(0, 0), (1, 0)], &[0, 3], 50)).unwrap();
     writer.commit_batch(&records(&[(2, 1)], &[0, 3], 50)).unwrap();
     drop(writer);
-    // An orphan that must not be scanned.
     std::fs::copy(dir.path().join("batches/batch-000000.parquet"), dir.path().join("batches/batch-000009.parquet"))
         .unwrap();
+    dir
+}
+
+/// `Dataset::committed_files` lists exactly the committed files, in commit order.
+#[test]
+fn the_committed_files_are_the_journaled_ones() {
+    let dir = two_batches_and_an_orphan();
+    let files = Dataset::committed_files(dir.path()).unwrap();
+    let names: Vec<String> = files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, ["batch-000000.parquet", "batch-000001.parquet"]);
+    let empty = tempfile::tempdir().unwrap();
+    drop(DatasetWriter::create(empty.path(), meta(), IfExists::Refuse).unwrap());
+    assert!(matches!(Dataset::committed_files(empty.path()), Err(metaplate_store::StoreError::EmptyDataset { .. })));
+}
+
+/// `Dataset::lazy` scans exactly the committed files, in the dataset's columns.
+#[cfg(feature = "polars")]
+#[test]
+fn the_polars_lazy_frame_reads_the_committed_rows() {
+    use polars::prelude::{DataType, col, lit};
+    let dir = two_batches_and_an_orphan();
     let frame = Dataset::lazy(dir.path()).unwrap().collect().unwrap();
     assert_eq!(frame.height(), 6);
     let schema = frame.schema();
