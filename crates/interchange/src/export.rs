@@ -9,8 +9,8 @@
 //! nothing for one in m/s (an imported operational record), a declared-unknown quantity as data type 0 "unknown";
 //! otherwise velocity over "full-scale drive" (data type 0, unknown), as the dataset's description says.
 //!
-//! The ID lines carry what an import needs to rebuild the dataset exactly ([`IdLines`](crate::IdLines)); other tools show them as
-//! text.
+//! The ID lines carry what an import needs to rebuild the dataset's rows exactly ([`IdLines`](crate::IdLines)), not
+//! a scan's calibration hash (64 hex digits do not fit them); other tools show them as text.
 
 use std::collections::HashMap;
 use std::fs::File;

@@ -14,7 +14,7 @@
 //! - [`lattice`]: 3-D node positions placed on the regular lattice of their plane, or in their plane alone
 //!   (scattered points, `metaplate_store::ScatteredPoints`).
 //! - [`IdLines`]: the ID lines of an exported record, the one format export and import share: they carry what an
-//!   import needs to rebuild the dataset exactly (key, grid, scene, row quality, source); a file without them
+//!   import needs to rebuild the dataset's rows exactly (key, grid, scene, row quality, source); a file without them
 //!   (another tool's) is placed by its nodes (`metaplate_core::grid::snap_to_grid`).
 //!
 //! Every error is an [`InterchangeError`] saying what and where. The crate's tests round-trip a dataset through a
