@@ -119,11 +119,7 @@ pub fn import(
     options: ImportOptions,
     mut progress: impl FnMut(Progress),
 ) -> Result<ImportSummary, InterchangeError> {
-    if let Some(name) = &options.estimator
-        && !crate::survey::ESTIMATORS.contains(&name.as_str())
-    {
-        refuse!("--estimator {name}: accepted are {}", crate::survey::ESTIMATORS.join(", "));
-    }
+    let estimator = crate::survey::wanted_estimator(&options)?;
     let survey = survey(files, &options)?;
     let Some(first_ids) = survey.first_ids.clone() else {
         refuse!(
@@ -150,7 +146,7 @@ pub fn import(
         None => survey.nodes.iter().map(|(&label, p)| (label, p.map(|v| v / length_per_m))).collect(),
     };
     let Plan { grid, by_at, grid_from, actuators, placed, frame, scattered, not_chosen, estimator, response_direction } =
-        plan(files, &survey, &first_ids, &options, &positions_m)?;
+        plan(files, &survey, &first_ids, &options, estimator, &positions_m)?;
     let skipped: Vec<SkippedRecord> = survey.skipped.iter().cloned().chain(not_chosen).collect();
     // The references' positions in the grid's frame, where a node gives them (for an export without a scene).
     let reference_at = |node: i64| -> Option<(f64, f64)> {

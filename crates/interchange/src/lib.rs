@@ -11,6 +11,8 @@
 //!   (point, actuator), and with [`ExportOptions`] its frequency response too).
 //! - [`import`](mod@import): what is read and what skipped, how the grid and keys, the actuators, the sample rate
 //!   (`metaplate_uff::sample_rate_from_step`), the function and the units are found, and what is refused.
+//! - `survey::choose`: of several responses of one (point, actuator) and kind, the one imported (the estimator, the
+//!   direction along the plate's normal), the others listed as skipped.
 //! - [`lattice`]: 3-D node positions placed on the regular lattice of their plane, or in their plane alone
 //!   (scattered points, `metaplate_store::ScatteredPoints`).
 //! - [`IdLines`]: the ID lines of an exported record, the one format export and import share: they carry what an

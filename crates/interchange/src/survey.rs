@@ -11,9 +11,14 @@ use metaplate_store::ScatteredPoints;
 use metaplate_uff::{AxisCharacteristics, FunctionType, UffDecoder, UffRecord, Units164};
 
 use crate::error::{InterchangeError, refuse};
+
+mod choose;
 use crate::lattice::{self, Frame};
 use crate::quantity::{self, Denominator, OrdinateQuantity};
 use crate::{IdLines, ImportOptions};
+use choose::Chooser;
+pub(crate) use choose::wanted_estimator;
+pub use choose::{ESTIMATORS, MAX_AXIS_ANGLE_DEG};
 
 /// Bytes read from a file at a time.
 const READ_CHUNK: usize = 1 << 20;
@@ -23,22 +28,6 @@ pub(crate) const RESPONSE_TYPES: [FunctionType; 2] = [FunctionType::TimeResponse
 
 /// Spacing given to the grid of a single point, m (a grid needs one; nothing measures it).
 pub const ONE_POINT_SPACING_M: f64 = 1e-3;
-
-/// The estimators of a frequency response a writer names in ID line 2 (Polytec PSV writes `Vib  Ref1  H1 Velocity
-/// / Force`, one record per estimator it exports), in the order an import prefers them when the files hold several
-/// of one pair and [`ImportOptions::estimator`] names none.
-pub const ESTIMATORS: [&str; 5] = ["H1", "H2", "H3", "Hv", "FRF"];
-
-/// The largest angle between the points' plane normal and a coordinate axis for which, of responses in several
-/// directions at one point (a 3-D scan head's X, Y and Z), the one along that axis is kept as the plate's normal
-/// velocity, degrees: its error is 1 - cos(5°) = 0.4 % of the normal velocity plus sin(5°) = 9 % of the in-plane
-/// velocity, which is small on a plate driven in bending.
-pub const MAX_AXIS_ANGLE_DEG: f64 = 5.0;
-
-/// The estimator ID line 2 names (one of [`ESTIMATORS`], as a separate word), if any.
-fn estimator(id_line_2: &str) -> Option<&'static str> {
-    id_line_2.split_whitespace().find_map(|w| ESTIMATORS.iter().find(|e| **e == w).copied())
-}
 
 /// A record an import stepped over, and where.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -77,7 +66,7 @@ pub(crate) struct Seen {
     pub(crate) reference: (i64, i8),
     /// The metaplate key of ID line 1, if any.
     pub(crate) key: Option<(u32, u16)>,
-    /// The estimator ID line 2 names, if any ([`ESTIMATORS`]).
+    /// The estimator ID line 2 names, if any ([`choose::ESTIMATORS`]).
     pub(crate) estimator: Option<&'static str>,
     pub(crate) ordinate: OrdinateQuantity,
     pub(crate) denominator: Denominator,
@@ -212,7 +201,7 @@ pub(crate) fn survey(files: &[PathBuf], options: &ImportOptions) -> Result<Surve
                     response_direction: h.response.direction,
                     reference: (h.reference.node, h.reference.direction),
                     key: IdLines::parse_key(&h.id_lines[0]),
-                    estimator: estimator(&h.id_lines[1]),
+                    estimator: choose::estimator(&h.id_lines[1]),
                     // Placeholders until dataset 164 is known (it may come after the responses).
                     ordinate: OrdinateQuantity::Other { name: String::new() },
                     denominator: Denominator::Unused,
@@ -276,13 +265,13 @@ pub(crate) struct Plan {
 }
 
 /// The grid, the actuators and each key's function: one per key, the time response, else the FRF; of several of
-/// one kind, the estimator [`ImportOptions::estimator`] names (else the first of [`ESTIMATORS`] present), then the
-/// direction along the points' plane normal (within [`MAX_AXIS_ANGLE_DEG`] of an axis).
+/// one kind, as [`Chooser`] chooses (`estimator`: the one [`choose::wanted_estimator`] resolved).
 pub(crate) fn plan(
     files: &[PathBuf],
     survey: &Survey,
     first_ids: &[String; 5],
     options: &ImportOptions,
+    estimator: Option<&'static str>,
     positions_m: &HashMap<i64, [f64; 3]>,
 ) -> Result<Plan, InterchangeError> {
     // Nodes off the plane z = const are an import's original positions exported again: placed again as on their
@@ -325,8 +314,7 @@ pub(crate) fn plan(
     };
     // The plane's normal: the fitted one, else z (points in a plane z = const, or on metaplate's grid).
     let normal = frame.as_ref().map_or([0.0, 0.0, 1.0], |f| f.normal);
-    let mut chooser =
-        Chooser { files, survey, options, normal, not_chosen: Vec::new(), estimator: None, direction: None };
+    let mut chooser = Chooser::new(files, survey, estimator, normal);
     let mut by_at = HashMap::new();
     for (key, candidates) in &groups {
         let best = candidates.iter().map(|&i| rank(i)).min().unwrap_or(0);
@@ -347,118 +335,8 @@ pub(crate) fn plan(
             by_at.insert(survey.functions[i].at, *key);
         }
     }
-    let Chooser { not_chosen, estimator, direction: response_direction, .. } = chooser;
+    let (not_chosen, estimator, response_direction) = chooser.finish();
     Ok(Plan { grid, by_at, grid_from, actuators, placed, frame, scattered, not_chosen, estimator, response_direction })
-}
-
-/// Chooses among several responses of one kind for one key, and lists those it leaves.
-struct Chooser<'a> {
-    files: &'a [PathBuf],
-    survey: &'a Survey,
-    options: &'a ImportOptions,
-    /// Unit normal of the points' plane.
-    normal: [f64; 3],
-    not_chosen: Vec<SkippedRecord>,
-    estimator: Option<&'static str>,
-    direction: Option<i8>,
-}
-
-impl Chooser<'_> {
-    fn leave(&mut self, i: usize, what: String) {
-        let seen = &self.survey.functions[i];
-        self.not_chosen.push(SkippedRecord {
-            file: self.files[seen.at.0].display().to_string(),
-            record: seen.at.1,
-            line: seen.line,
-            what,
-        });
-    }
-
-    /// Of FRFs by several estimators (ID line 2), those of the one asked for, else of the first of [`ESTIMATORS`]
-    /// present. Responses that name none, or one, are kept as they are.
-    fn by_estimator(&mut self, key: (u32, u16), pool: Vec<usize>) -> Result<Vec<usize>, InterchangeError> {
-        let named: BTreeSet<Option<&'static str>> = pool.iter().map(|&i| self.survey.functions[i].estimator).collect();
-        if named.len() < 2 {
-            return Ok(pool);
-        }
-        let wanted = match &self.options.estimator {
-            Some(name) => ESTIMATORS.iter().copied().find(|e| e == name),
-            None => ESTIMATORS.iter().copied().find(|e| named.contains(&Some(*e))),
-        };
-        let Some(wanted) = wanted else {
-            refuse!(
-                "--estimator {}: accepted are {}",
-                self.options.estimator.as_deref().unwrap_or(""),
-                ESTIMATORS.join(", ")
-            )
-        };
-        let (kept, left): (Vec<usize>, Vec<usize>) =
-            pool.into_iter().partition(|&i| self.survey.functions[i].estimator == Some(wanted));
-        if kept.is_empty() {
-            let present: Vec<&str> = named.iter().map(|e| e.unwrap_or("none named")).collect();
-            refuse!(
-                "point {} actuator {}: {} holds frequency responses by the estimators {} (ID line 2), none by {wanted}; \
-                 --estimator takes one of {}",
-                key.0,
-                key.1,
-                record_at(self.files, &self.survey.functions[left[0]]),
-                present.join(", "),
-                ESTIMATORS.join(", ")
-            );
-        }
-        for i in left {
-            let other = self.survey.functions[i].estimator.unwrap_or("no named");
-            self.leave(i, format!("dataset 58, {other} estimate (not chosen: the {wanted} estimate is imported)"));
-        }
-        self.estimator = Some(wanted);
-        Ok(kept)
-    }
-
-    /// Of responses in several directions at one point (a 3-D scan head's X, Y and Z), the one along the axis
-    /// nearest the points' plane normal, when that axis is within [`MAX_AXIS_ANGLE_DEG`] of it.
-    fn by_direction(&mut self, key: (u32, u16), pool: Vec<usize>) -> Result<Vec<usize>, InterchangeError> {
-        let directions: BTreeSet<i8> = pool.iter().map(|&i| self.survey.functions[i].response_direction).collect();
-        if directions.len() < 2 {
-            return Ok(pool);
-        }
-        let n = self.normal;
-        let axis = (0..3).max_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs())).unwrap_or(2);
-        let angle_deg = n[axis].abs().clamp(0.0, 1.0).acos().to_degrees();
-        let listed: Vec<String> = directions.iter().map(i8::to_string).collect();
-        let first = record_at(self.files, &self.survey.functions[pool[0]]);
-        if angle_deg > MAX_AXIS_ANGLE_DEG {
-            refuse!(
-                "point {} actuator {}: {first} and others hold responses in the directions {} (record 6); the points' \
-                 plane normal ({:.3}, {:.3}, {:.3}) is {angle_deg:.1}° from the nearest axis, and an import keeps the \
-                 component along an axis within {MAX_AXIS_ANGLE_DEG}° of the normal (the normal velocity of a tilted \
-                 plate combines the components, which it does not do)",
-                key.0,
-                key.1,
-                listed.join(", "),
-                n[0],
-                n[1],
-                n[2]
-            );
-        }
-        let code = i8::try_from(axis + 1).unwrap_or(3);
-        let (kept, left): (Vec<usize>, Vec<usize>) =
-            pool.into_iter().partition(|&i| self.survey.functions[i].response_direction.abs() == code);
-        if kept.is_empty() {
-            refuse!(
-                "point {} actuator {}: {first} and others hold responses in the directions {} (record 6), none along \
-                 the points' plane normal (direction ±{code})",
-                key.0,
-                key.1,
-                listed.join(", ")
-            );
-        }
-        for i in left {
-            let d = self.survey.functions[i].response_direction;
-            self.leave(i, format!("dataset 58, response direction {d} (not chosen: the plate's normal is ±{code})"));
-        }
-        self.direction = Some(code);
-        Ok(kept)
-    }
 }
 
 /// The grid placed from the response nodes' positions (m), each function's key, and the actuators: the distinct
