@@ -2,7 +2,8 @@
 //! tests/recipes.rs, the scene's own seed; Green's functions cached under the target directory, shared with the other
 //! tests), then patterns played with the onset measured on the loopback, a clipping level and an off-plate pixel
 //! refused; the same scan on scattered points (points on no lattice, as an import of a scan mesh places them) plays
-//! as on its grid, and a measurement that is no scan through a calibration is refused by its unit.
+//! as on its grid, the scan exported as a universal file and imported again plays as the scan, and a measurement
+//! that is no scan through a calibration is refused by its unit.
 
 // Helpers outside #[test] functions unwrap too: a failure there is a failed test.
 #![allow(clippy::unwrap_used)]
@@ -245,4 +246,32 @@ fn a_measurement_that_is_no_scan_through_a_calibration_is_refused_by_its_unit() 
     assert!(stderr.contains("impulse responses are in `m/s/N`") && stderr.contains("metaplate focus"), "{stderr}");
     assert!(!stderr.contains("plate `uff-import`"), "{stderr}");
     assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn a_scan_exported_and_imported_again_plays_as_the_scan() {
+    // The universal file keeps the scan's unit and calibration in its header (dataset 151): the import restores
+    // them, and `play` renders the same drives from the same responses (58b in single precision: the stored f32
+    // values exactly).
+    let (_, scan) = common::calibrated_scan();
+    let dir = common::scratch("play-round-trip", "uff");
+    let file = dir.join("scan.uff");
+    let data = dir.join("imported");
+    let (file_arg, data_arg) = (file.to_str().unwrap(), data.to_str().unwrap());
+    let export = ["export", "--data", scan.to_str().unwrap(), "--format", "uff58b", "--out", file_arg];
+    let out = common::metaplate_bare(&export);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = common::metaplate_bare(&["import", "--uff", file_arg, "--out", data_arg]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("measured through the calibration"));
+
+    let pixels = ["--pixel", "0,-0.03", "--pixel", "0.08,0.03:null", "--json"];
+    let json = |out: Output| -> Value {
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let (scanned, imported) = (json(play_on(&scan, &pixels)), json(play_on(&data, &pixels)));
+    for key in ["clip_margin_db", "pixels", "focus_s", "duration_s"] {
+        assert_eq!(imported[key], scanned[key], "{key}: {imported} vs {scanned}");
+    }
 }

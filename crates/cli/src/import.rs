@@ -63,6 +63,9 @@ pub fn run(args: &ImportArgs) -> anyhow::Result<()> {
     if let Some(estimator) = summary.estimator {
         eprintln!("estimator: {estimator} (of several per pair; the others skipped)");
     }
+    if let Some(hash) = &summary.calibration {
+        eprintln!("measured through the calibration {hash} (from the export's header; `play` checks it)");
+    }
     if let Some(direction) = summary.response_direction {
         eprintln!("response direction: ±{direction} (along the points' plane normal; the others skipped)");
     }

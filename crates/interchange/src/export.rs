@@ -1,6 +1,7 @@
 //! A dataset as a universal file (UFF datasets 164, 2411 and 58 or 58b), streamed.
 //!
-//! The file holds, in this order: dataset 164 (SI units); dataset 2411 (one node per grid point the dataset
+//! The file holds, in this order: dataset 151 (the header: the dataset's name, its `ir` unit in full, the calibration
+//! a scan went through: `crate::header`); dataset 164 (SI units); dataset 2411 (one node per grid point the dataset
 //! commits, labelled `point_index + 1`, at its nominal grid position, z = 0; then one reference node per actuator,
 //! labelled `nx * ny + 1 + actuator`, at the actuator's magnet); then per committed (point, actuator) one dataset
 //! 58/58b: the impulse response (function type 1, time from `-pre_samples / fs`), and with
@@ -9,8 +10,8 @@
 //! nothing for one in m/s (an imported operational record), a declared-unknown quantity as data type 0 "unknown";
 //! otherwise velocity over "full-scale drive" (data type 0, unknown), as the dataset's description says.
 //!
-//! The ID lines carry what an import needs to rebuild the dataset's rows exactly ([`IdLines`](crate::IdLines)), not
-//! a scan's calibration hash (64 hex digits do not fit them); other tools show them as text.
+//! The ID lines carry what an import needs to rebuild the dataset's rows exactly ([`IdLines`](crate::IdLines)); the
+//! header what belongs to the dataset as a whole. Other tools show both as text.
 
 use std::collections::HashMap;
 use std::fs::File;
@@ -171,6 +172,7 @@ pub fn export(
     let mut sink = BufWriter::with_capacity(1 << 20, file);
     let encoder = UffEncoder::new(options.format, options.precision);
     let mut buffer = Vec::with_capacity(1 << 20);
+    encoder.encode(&UffRecord::Header(Box::new(crate::header::for_dataset(data, meta))), &mut buffer)?;
     encoder.encode(&UffRecord::Units(Units164::si()), &mut buffer)?;
     let labels = NodeLabels::of(meta);
     let mut nodes: Vec<Node> = Vec::with_capacity(points.len() + actuators.len());

@@ -35,6 +35,9 @@
 //!   other quantity refused by name unless [`ImportOptions::accept_unknown_quantity`]. Every imported response must
 //!   have the first one's quantity and denominator. The `ir` unit is m/s/N over a force, m/s without a
 //!   denominator, else "m/s per" its units label; the conversion is printed and stored (`config.ordinate`).
+//! - **Metaplate's header** (dataset 151 of an export, `crate::header`): the `ir` unit in full where the responses
+//!   say only "full scale" (a scan's), and the calibration a scan went through (`config.calibration`), so that an
+//!   exported scan imported again plays through its calibration. Another tool's header is skipped.
 //! - **Refusals** name the file, the record (ordinal, and the line of its opening delimiter), the line and field,
 //!   and what would be accepted.
 
@@ -49,7 +52,7 @@ use serde_json::json;
 
 use crate::convert::to_ir;
 use crate::error::{InterchangeError, refuse};
-use crate::quantity::OrdinateQuantity;
+use crate::quantity::{Denominator, OrdinateQuantity};
 use crate::survey::{ActuatorRef, Plan, SkippedRecord, for_each_record, plan, read_nodes_csv, record_at, survey};
 use crate::{IdLines, Progress};
 
@@ -103,6 +106,8 @@ pub struct ImportSummary {
     pub estimator: Option<&'static str>,
     /// The response direction imported where a point had responses in several (1 x, 2 y, 3 z).
     pub response_direction: Option<i8>,
+    /// The content hash of the calibration a scan was measured through, restored from metaplate's header.
+    pub calibration: Option<String>,
 }
 
 /// Builds the dataset `out` (which must not exist, or be empty) from the universal files `files`, read in order.
@@ -201,10 +206,22 @@ pub fn import(
             record_at(files, first)
         );
     }
-    let ir_unit = match motion {
-        Some(_) => first.denominator.ir_unit(),
-        None => format!("declared unknown ({})", crate::quantity::describe_ordinate(&first.ordinate)),
+    // A metaplate export's header gives the unit in full where the responses' records say only "full scale".
+    let over = match &first.denominator {
+        Denominator::Other { label } => Some(label.as_str()),
+        _ => None,
     };
+    let restored_unit = survey
+        .restored
+        .as_ref()
+        .and_then(|r| r.unit_over(over))
+        .filter(|_| motion == Some(crate::quantity::Motion::Velocity));
+    let ir_unit = match (motion, restored_unit) {
+        (Some(_), Some(unit)) => unit.to_owned(),
+        (Some(_), None) => first.denominator.ir_unit(),
+        (None, _) => format!("declared unknown ({})", crate::quantity::describe_ordinate(&first.ordinate)),
+    };
+    let calibration = survey.restored.as_ref().and_then(|r| r.calibration.clone());
     let to_si = ordinate_to_si / first.denominator.to_si();
     progress(Progress { done: 0, total });
 
@@ -282,9 +299,13 @@ pub fn import(
                 "estimator": estimator,
                 "response_direction": response_direction,
             });
-            let serde_json::Value::Object(config) = config else {
+            let serde_json::Value::Object(mut config) = config else {
                 refuse!("internal: configuration is not a JSON object")
             };
+            // The calibration a scan went through, as the scan's own configuration names it (`play` checks it).
+            if let Some(hash) = &calibration {
+                config.insert("calibration".into(), json!(hash));
+            }
             let mut meta = DatasetMeta::new("import-uff", config, scene.clone(), env!("CARGO_PKG_VERSION"), seed, grid)
                 .with_description(description);
             if let Some(scattered) = scattered.clone() {
@@ -325,6 +346,7 @@ pub fn import(
         skipped,
         estimator,
         response_direction,
+        calibration,
     })
 }
 

@@ -15,6 +15,8 @@
 //!   direction along the plate's normal), the others listed as skipped.
 //! - [`lattice`]: 3-D node positions placed on the regular lattice of their plane, or in their plane alone
 //!   (scattered points, `metaplate_store::ScatteredPoints`).
+//! - `header`: the dataset 151 an export begins with: the dataset's `ir` unit in full and the calibration a scan went
+//!   through, which an import restores (so that a scan exported and imported again still plays).
 //! - [`IdLines`]: the ID lines of an exported record, the one format export and import share: they carry what an
 //!   import needs to rebuild the dataset's rows exactly (key, grid, scene, row quality, source); a file without them
 //!   (another tool's) is placed by its nodes (`metaplate_core::grid::snap_to_grid`).
@@ -27,6 +29,7 @@
 mod convert;
 mod error;
 pub mod export;
+mod header;
 mod id_lines;
 pub mod import;
 pub mod lattice;

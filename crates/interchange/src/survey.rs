@@ -84,6 +84,8 @@ pub(crate) struct Survey {
     /// ID lines of the first response.
     pub(crate) first_ids: Option<[String; 5]>,
     pub(crate) skipped: Vec<SkippedRecord>,
+    /// What metaplate's dataset 151 restores, from the first file that has one.
+    pub(crate) restored: Option<crate::header::Restored>,
 }
 
 /// Decodes each file in turn (responses only), handing every record to `visit` with the file's index, the record's
@@ -208,6 +210,27 @@ pub(crate) fn survey(files: &[PathBuf], options: &ImportOptions) -> Result<Surve
                     axes: Box::new((h.ordinate.clone(), h.denominator.clone())),
                 });
             }
+            UffRecord::Header(header) => match crate::header::restored(&header) {
+                Some(restored) => match &survey.restored {
+                    Some(earlier) if *earlier != restored => refuse!(
+                        "{} record {ordinal} (dataset 151 from line {line}): metaplate's header of another dataset \
+                         (unit {:?}, calibration {}) than an earlier file's (unit {:?}, calibration {}); the files of \
+                         one export are accepted together",
+                        files[f].display(),
+                        restored.unit,
+                        restored.calibration.as_deref().unwrap_or("none"),
+                        earlier.unit,
+                        earlier.calibration.as_deref().unwrap_or("none")
+                    ),
+                    _ => survey.restored = Some(restored),
+                },
+                None => survey.skipped.push(SkippedRecord {
+                    file: files[f].display().to_string(),
+                    record: ordinal,
+                    line,
+                    what: format!("dataset 151 ({})", dataset_name(151)),
+                }),
+            },
             UffRecord::Other(other) => {
                 let what = match other.function_type {
                     Some(code) => format!("dataset 58, function type {code} ({})", function_type_name(code)),

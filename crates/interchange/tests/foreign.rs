@@ -40,12 +40,13 @@ fn write(path: &Path, records: &[UffRecord]) {
     std::fs::write(path, out).unwrap();
 }
 
-/// As another tool writes: no metaplate ID lines (so the grid comes from the nodes and the actuators from the
+/// As another tool writes: no metaplate header or ID lines (so the grid comes from the nodes and the actuators from the
 /// references), and only the frequency responses.
 fn foreign(records: &[UffRecord]) -> Vec<UffRecord> {
     records
         .iter()
         .filter(|r| !matches!(r, UffRecord::Function(f) if f.header.function_type == FunctionType::TimeResponse))
+        .filter(|r| !matches!(r, UffRecord::Header(_)))
         .cloned()
         .map(|mut r| {
             if let UffRecord::Function(f) = &mut r {

@@ -1,8 +1,9 @@
 //! pyuff reads what an imported dataset exports: a scan mesh on a tilted, rotated plate, imported (its lattice
 //! fitted) and exported without a scene in ASCII single precision, reads back in pyuff equal to the dataset within
-//! the format's 6 significant digits, at the nodes' original positions; and a PSV scan mesh on no lattice, imported
-//! and exported, reads back equal to the PSV export (labels, directions, positions, FRFs). Needs a Python with pyuff: `$METAPLATE_PYTHON`,
-//! else the project's `.venv/bin/python` that `scripts/install-deps.sh` makes. Run:
+//! the format's 6 significant digits, at the nodes' original positions, with its header (dataset 151: the dataset's
+//! name and unit); and a PSV scan mesh on no lattice, imported and exported, reads back equal to the PSV export
+//! (labels, directions, positions, FRFs). Needs a Python with pyuff: `$METAPLATE_PYTHON`, else the project's
+//! `.venv/bin/python` that `scripts/install-deps.sh` makes. Run:
 //! `cargo test -p metaplate-interchange --test tests pyuff_reads -- --ignored`.
 
 #![allow(clippy::unwrap_used)] // Tests may unwrap: a failure is the test failing.
@@ -32,6 +33,12 @@ fn pyuff_reads_an_imported_scan_mesh_exported_without_a_scene() {
     let read = pyuff_read(&file);
     let original: std::collections::HashMap<u32, [f64; 3]> = common::decode_nodes(&mesh);
     let dataset = Dataset::open(&data).unwrap();
+    // The header as pyuff reads it: the dataset's name and unit, metaplate's programs.
+    let unit = &dataset.manifest().meta.description.as_ref().unwrap().ir_unit;
+    let header = &read["headers"][0];
+    assert_eq!((header["model_name"].as_str(), header["description"].as_str()), (Some("mesh"), Some(unit.as_str())));
+    assert_eq!(header["db_app"], "metaplate");
+    assert!(header["program"].as_str().unwrap().starts_with("metaplate "), "{header}");
     let grid = dataset.manifest().meta.grid;
     let functions = read["functions"].as_array().unwrap();
     assert_eq!(functions.len(), dataset.len());

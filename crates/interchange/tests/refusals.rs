@@ -36,10 +36,11 @@ fn an_ordinate_that_is_no_motion_is_refused_naming_the_file_record_line_field_an
         true
     });
     let why = refusal(std::slice::from_ref(&pressure), &tmp.path().join("out"));
-    // Records 1 and 2 are units and nodes (lines 1-6 and 7-37); the first response opens at line 38.
+    // Records 1 to 3 are the header, units and nodes (lines 1-10, 11-16 and 17-47); the first response opens at
+    // line 48.
     assert!(
         why.starts_with(&format!(
-            "{} record 3 (dataset 58 from line 38), line 48, record 9 (ordinate data characteristics): the ordinate \
+            "{} record 4 (dataset 58 from line 48), line 58, record 9 (ordinate data characteristics): the ordinate \
              is pressure (data type 15, \"Pa\"); metaplate imports velocity, and acceleration or displacement",
             pressure.display()
         )),
@@ -60,7 +61,7 @@ fn two_responses_of_one_key_and_type_are_refused_naming_both_records() {
     let (_, file) = exported(tmp.path());
     let why = refusal(&[file.clone(), file.clone()], &tmp.path().join("out"));
     assert!(why.contains("has two responses of one type"), "{why}");
-    let at = format!("{} record 3 (dataset 58 from line 38)", file.display());
+    let at = format!("{} record 4 (dataset 58 from line 48)", file.display());
     assert!(why.contains(&format!("{at} and {at}")), "{why}");
 }
 
@@ -79,11 +80,11 @@ fn foreign_responses_without_nodes_cannot_be_placed() {
         _ => true,
     });
     let why = refusal(std::slice::from_ref(&bare), &tmp.path().join("out"));
-    // Without dataset 2411 the units take lines 1-6 and the first response opens at line 7.
+    // Without dataset 2411 the header and units take lines 1-16 and the first response opens at line 17.
     assert_eq!(
         why,
         format!(
-            "{} record 2 (dataset 58 from line 7), line 14, record 6 (DOF identification), response node: node 1 has \
+            "{} record 3 (dataset 58 from line 17), line 24, record 6 (DOF identification), response node: node 1 has \
              no position: no dataset 2411 lists it; give the positions with --nodes FILE (CSV columns node,x_m,y_m \
              and optionally z_m)",
             bare.display()

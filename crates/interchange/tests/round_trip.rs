@@ -6,12 +6,12 @@ use metaplate_interchange::{ExportOptions, ImportOptions, Progress};
 use metaplate_store::{Dataset, IR_UNIT_M_S_PER_N};
 use metaplate_uff::{ByteOrder, Format, FunctionType, Precision, UffRecord};
 
-use crate::common::{self, IR_LEN, RATE_HZ};
+use crate::common::{self, CALIBRATION, IR_LEN, RATE_HZ, SCAN_UNIT};
 
 #[test]
 fn every_format_gives_back_every_response_its_quality_grid_scene_and_description() {
     let tmp = tempfile::tempdir().unwrap();
-    let data = common::dataset(tmp.path(), 2, 4, "m/s per full-scale drive");
+    let data = common::dataset(tmp.path(), 2, 4, SCAN_UNIT);
     let original = Dataset::open(&data).unwrap();
     let binary = |byte_order| Format::Binary { byte_order };
     // (format, precision, bound on the error relative to a response's peak): ASCII single writes 6 significant
@@ -46,13 +46,66 @@ fn every_format_gives_back_every_response_its_quality_grid_scene_and_description
         }
         let (want, got) = (&original.manifest().meta, &imported.manifest().meta);
         assert_eq!((got.grid, &got.scene, got.seed), (want.grid, &want.scene, want.seed), "{what}");
-        // A unit other than m/s/N comes back as "m/s per" the denominator's units label (the file says no more).
+        // The scan's unit and calibration, from the export's header (the responses' records say "full scale").
         let description = got.description.as_ref().unwrap();
-        assert_eq!((description.ir_unit.as_str(), description.pre_samples), ("m/s per full scale", 4), "{what}");
+        assert_eq!((description.ir_unit.as_str(), description.pre_samples), (SCAN_UNIT, 4), "{what}");
+        assert_eq!(got.config["calibration"], CALIBRATION, "{what}");
+        assert_eq!(summary.calibration.as_deref(), Some(CALIBRATION), "{what}");
         assert_eq!(got.recipe, "import-uff");
         assert_eq!(got.config["source_recipe"], "scan");
         assert_eq!(got.config["grid_from"], "metaplate ID lines");
     }
+}
+
+#[test]
+fn without_metaplates_header_the_unit_is_the_records_and_another_tools_header_is_skipped() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = common::dataset(tmp.path(), 1, 0, SCAN_UNIT);
+    let file = tmp.path().join("all.uff");
+    let options = common::binary_double();
+    common::export(&data, &file, &options).unwrap();
+    // Without the header: the unit the records give, "m/s per" the denominator's label, and no calibration.
+    let headless = tmp.path().join("headless.uff");
+    common::rewrite(&file, &headless, options.format, options.precision, |r| !matches!(r, UffRecord::Header(_)));
+    let summary = common::import(&[headless], &tmp.path().join("a"), ImportOptions::default()).unwrap();
+    assert_eq!((summary.ir_unit.as_str(), summary.calibration), ("m/s per full scale", None));
+    assert!(summary.skipped.is_empty());
+    let imported = Dataset::open(tmp.path().join("a")).unwrap();
+    assert_eq!(imported.manifest().meta.config.get("calibration"), None);
+    // Another tool's header (LMS Test.Lab's program in record 3): skipped, restoring nothing.
+    let foreign = tmp.path().join("foreign.uff");
+    common::rewrite(&file, &foreign, options.format, options.precision, |r| {
+        if let UffRecord::Header(h) = r {
+            h.db_program = "LMS Test.Lab Rev project-15A".into();
+        }
+        true
+    });
+    let summary =
+        common::import(std::slice::from_ref(&foreign), &tmp.path().join("b"), ImportOptions::default()).unwrap();
+    assert_eq!((summary.ir_unit.as_str(), summary.calibration), ("m/s per full scale", None));
+    assert_eq!(
+        metaplate_interchange::skipped_summary(&summary.skipped),
+        format!("1 x dataset 151 (header) (first: {} record 1, line 1)", foreign.display())
+    );
+    // Two exports of different calibrations are not merged under one.
+    let other = tmp.path().join("other.uff");
+    common::rewrite(&file, &other, options.format, options.precision, |r| {
+        if let UffRecord::Header(h) = r {
+            h.db_program = format!("metaplate cal={}", "0".repeat(64));
+        }
+        !matches!(r, UffRecord::Function(_))
+    });
+    let why = common::import(&[file, other.clone()], &tmp.path().join("c"), ImportOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        why.starts_with(&format!(
+            "{} record 1 (dataset 151 from line 1): metaplate's header of another dataset",
+            other.display()
+        )),
+        "{why}"
+    );
+    assert!(!tmp.path().join("c").exists(), "nothing written");
 }
 
 #[test]

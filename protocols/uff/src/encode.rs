@@ -2,7 +2,7 @@
 
 use crate::error::EncodeError;
 use crate::fortran::{latin1, push_exp, push_int, push_left, push_right};
-use crate::model::{AxisCharacteristics, Dof, FunctionHeader, Nodes2411, OrdinateRef, UffRecord, Units164};
+use crate::model::{AxisCharacteristics, Dof, FunctionHeader, Header151, Nodes2411, OrdinateRef, UffRecord, Units164};
 
 /// Byte order of 58b binary data (field 3 of the 58b identifier line).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -57,7 +57,8 @@ impl Precision {
 /// the specification says `E13.5`), with two deliberate differences in 58b: the byte count is the true one for
 /// complex values (pyuff states half), and single precision writes `f32` values (pyuff writes `f64` always).
 ///
-/// `format` and `precision` apply to dataset 58; datasets 164 and 2411 are ASCII and double precision always.
+/// `format` and `precision` apply to dataset 58; datasets 151, 164 and 2411 are ASCII (164 and
+/// 2411 in double precision) always.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct UffEncoder {
     /// ASCII 58 or binary 58b.
@@ -77,6 +78,7 @@ impl UffEncoder {
     /// Appends `record` to `out`. On error nothing is appended.
     pub fn encode(&self, record: &UffRecord, out: &mut Vec<u8>) -> Result<(), EncodeError> {
         match record {
+            UffRecord::Header(header) => all_or_nothing(out, |out| write_header(header, out)),
             UffRecord::Units(units) => all_or_nothing(out, |out| write_units(units, out)),
             UffRecord::Nodes(nodes) => all_or_nothing(out, |out| write_nodes(nodes, out)),
             UffRecord::Function(function) => self.encode_function(&function.header, function.ordinate.as_ref(), out),
@@ -289,6 +291,9 @@ fn push_text(
     justify: Justify,
 ) -> Result<(), EncodeError> {
     let text = if text.is_empty() { "NONE" } else { text };
+    if width == 80 && text.trim_matches([' ', '\t']) == "-1" {
+        return Err(EncodeError::Delimiter { field });
+    }
     let bytes = match latin1(text) {
         Some(bytes) if bytes.len() <= width => bytes,
         _ => return Err(EncodeError::Text { field, text: text.to_owned(), max_len: width }),
@@ -336,6 +341,38 @@ fn push_axis(out: &mut Vec<u8>, axis: &AxisCharacteristics) -> Result<(), Encode
     out.push(b' ');
     push_text(out, "axis units label", &axis.units_label, 20, Justify::Left)?;
     out.push(b'\n');
+    Ok(())
+}
+
+fn write_header(header: &Header151, out: &mut Vec<u8>) -> Result<(), EncodeError> {
+    push_opening(out, 151);
+    let line = |out: &mut Vec<u8>, field, text: &str| -> Result<(), EncodeError> {
+        push_text(out, field, text, 80, Justify::Left)?;
+        out.push(b'\n');
+        Ok(())
+    };
+    let stamp = |out: &mut Vec<u8>, what: [&'static str; 2], [date, time]: &[String; 2]| {
+        push_text(out, what[0], date, 10, Justify::Left)?;
+        push_text(out, what[1], time, 10, Justify::Left)
+    };
+    // Records 1 to 3: Format(80A1) each.
+    line(out, "model file name", &header.model_name)?;
+    line(out, "model file description", &header.description)?;
+    line(out, "program which created the database", &header.db_program)?;
+    // Record 4: Format(10A1,10A1,3I10): the two versions and the file type (0, universal) as pyuff writes them.
+    stamp(out, ["date database created", "time database created"], &header.db_created)?;
+    for _ in 0..3 {
+        push_int(out, 0, 10);
+    }
+    out.push(b'\n');
+    // Record 5: Format(10A1,10A1).
+    stamp(out, ["date database saved", "time database saved"], &header.db_saved)?;
+    out.push(b'\n');
+    // Record 6: Format(80A1); record 7: Format(10A1,10A1).
+    line(out, "program which wrote the universal file", &header.program)?;
+    stamp(out, ["date file written", "time file written"], &header.file_written)?;
+    out.push(b'\n');
+    out.extend_from_slice(DELIMITER);
     Ok(())
 }
 

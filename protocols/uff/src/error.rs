@@ -132,6 +132,12 @@ pub enum EncodeError {
         /// Its width, characters.
         max_len: usize,
     },
+    /// A text field that fills its line reads `-1`: every reader would take it for the dataset's closing delimiter.
+    #[error("{field} \"-1\" would read as the delimiter that closes the dataset")]
+    Delimiter {
+        /// Which field.
+        field: &'static str,
+    },
     /// An integer does not fit its columns or its range.
     #[error("{field} = {value} is out of range {min}..={max}")]
     Integer {

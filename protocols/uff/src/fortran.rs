@@ -117,6 +117,14 @@ pub(crate) fn parse_text(field: &[u8]) -> String {
     field.iter().map(|&b| if is_text_byte(b) { char::from(b) } else { '?' }).collect()
 }
 
+/// A text record that fills a line (`80A1`: ID lines, the header's names): as [`parse_text`] of its 80 columns, but
+/// never `-1`, which written back would read as the dataset's closing delimiter (the line held more past column 80):
+/// that is shown as `(-1)`.
+pub(crate) fn parse_line_text(line: &[u8]) -> String {
+    let text = parse_text(columns(line, 0, 80));
+    if text == "-1" { "(-1)".to_owned() } else { text }
+}
+
 /// Whether a byte is printable Latin-1 (a text field's bytes).
 fn is_text_byte(b: u8) -> bool {
     (0x20..=0x7e).contains(&b) || b >= 0xa0
@@ -166,5 +174,7 @@ mod tests {
         assert_eq!(latin1("m/s\u{b2}"), Some(b"m/s\xb2".to_vec()));
         assert_eq!(latin1("\u{20ac}"), None);
         assert_eq!(parse_text(b"    "), "NONE");
+        assert_eq!(parse_line_text(format!("-1{}x", " ".repeat(80)).as_bytes()), "(-1)");
+        assert_eq!(parse_line_text(b" -12"), "-12");
     }
 }

@@ -13,6 +13,8 @@
 //!   byte order 1 little or 2 big endian, floating-point format 2, 11 ASCII lines, `NNNN` bytes of data).
 //! - **164** (units): units code, description, temperature mode and the four factors to SI.
 //! - **2411** (nodes, double precision): label, coordinate systems, colour and x, y, z.
+//! - **151** (header): the model's and the file's names, descriptions and programs, as text ([`Header151`]: read
+//!   line by line whatever a writer put there, never refused for its content).
 //!
 //! Other datasets are stepped over ([`UffRecord::Other`]), ASCII to their closing delimiter, binary by the byte count
 //! of their identifier line.
@@ -124,8 +126,8 @@ pub use decode::{Limits, UffDecoder};
 pub use encode::{ByteOrder, Format, Precision, UffEncoder};
 pub use error::{DecodeError, EncodeError, Location, Malformed};
 pub use model::{
-    AxisCharacteristics, Dof, Function58, FunctionHeader, FunctionType, Node, Nodes2411, Ordinate, OrdinateRef,
-    OtherDataset, UffRecord, Units164,
+    AxisCharacteristics, Dof, Function58, FunctionHeader, FunctionType, Header151, Node, Nodes2411, Ordinate,
+    OrdinateRef, OtherDataset, UffRecord, Units164,
 };
 pub use num_complex::Complex64;
 

@@ -5,6 +5,8 @@ use num_complex::Complex64;
 /// One dataset of a universal file.
 #[derive(Debug, Clone, PartialEq)]
 pub enum UffRecord {
+    /// Dataset 151: the file's header (names and programs, as text; boxed, as the function's header).
+    Header(Box<Header151>),
     /// Dataset 164: the file's units.
     Units(Units164),
     /// Dataset 2411: nodes with double-precision coordinates.
@@ -14,6 +16,30 @@ pub enum UffRecord {
     Function(Box<Function58>),
     /// A dataset of another number, stepped over whole (decoder only: the encoder refuses it).
     Other(OtherDataset),
+}
+
+/// Dataset 151, header: the model's name and description, the programs that made the model and the file, and
+/// when, as text. Each field holds at most 80 printable Latin-1 characters (dates and times 10), "NONE" for blank.
+///
+/// The decoder never refuses an ASCII dataset 151 for its content: writers fill it as they like (some leave records
+/// out), so each record is read as the text of its line, cut to its columns, a missing record "NONE"; record 4's
+/// two version fields and file type are not kept (the encoder writes 0, as pyuff does).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Header151 {
+    /// Record 1: the model file's name.
+    pub model_name: String,
+    /// Record 2: the model file's description.
+    pub description: String,
+    /// Record 3: the program that created the database.
+    pub db_program: String,
+    /// Record 4, fields 1 and 2: the date (DD-MMM-YY) and time (HH:MM:SS) the database was created.
+    pub db_created: [String; 2],
+    /// Record 5: the date and time the database was last saved.
+    pub db_saved: [String; 2],
+    /// Record 6: the program that wrote the universal file.
+    pub program: String,
+    /// Record 7: the date and time the universal file was written.
+    pub file_written: [String; 2],
 }
 
 /// Dataset 164, units: the factors that convert the file's units to SI.

@@ -236,7 +236,7 @@ fn unsupported_variants_are_named() {
 
 #[test]
 fn other_datasets_are_stepped_over() {
-    let mut bytes = b"    -1\n   151\nmodel\n    -1\n".to_vec();
+    let mut bytes = b"    -1\n  2412\nelement\n    -1\n".to_vec();
     // A binary dataset of another number, skipped by its byte count although its bytes hold line ends and `-1`.
     bytes.extend_from_slice(
         b"    -1\n  2414b     1     2           1           9     0     0           0           0\nhead\n",
@@ -253,7 +253,7 @@ fn other_datasets_are_stepped_over() {
             _ => None,
         })
         .collect();
-    assert_eq!(others, [(151, false, 1), (2414, true, 5)]);
+    assert_eq!(others, [(2412, false, 1), (2414, true, 5)]);
     assert_eq!(results.iter().filter(|r| r.is_ok()).count(), 6, "{results:?}");
 }
 
@@ -294,6 +294,22 @@ fn the_encoder_refuses_what_it_cannot_write_and_appends_nothing() {
     let mut header = base.header.clone();
     header.reference.direction = 7;
     assert!(matches!(refuse(OrdinateRef::Real(&[1.0]), &header, &mut out), EncodeError::Integer { .. }));
+    // A line of text reading `-1` would close the dataset where it stands.
+    let mut header = base.header.clone();
+    header.id_lines[4] = "  -1".to_owned();
+    assert_eq!(refuse(OrdinateRef::Real(&[1.0]), &header, &mut out), EncodeError::Delimiter { field: "ID line" });
+    let stamp = || ["NONE".to_owned(), "NONE".to_owned()];
+    let header151 = metaplate_uff::Header151 {
+        model_name: "-1".into(),
+        description: String::new(),
+        db_program: String::new(),
+        db_created: stamp(),
+        db_saved: stamp(),
+        program: String::new(),
+        file_written: stamp(),
+    };
+    let refused = encoder.encode(&metaplate_uff::UffRecord::Header(Box::new(header151)), &mut out).unwrap_err();
+    assert_eq!(refused, EncodeError::Delimiter { field: "model file name" });
     assert_eq!(out, b"kept");
     // Double precision takes what single cannot.
     UffEncoder::new(Format::Ascii, Precision::Double).encode_function(h, OrdinateRef::Real(&[1e39]), &mut out).unwrap();

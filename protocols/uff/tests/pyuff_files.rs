@@ -35,6 +35,35 @@ fn single_values() -> Vec<f64> {
 }
 
 #[test]
+fn a_header_is_pyuffs_byte_for_byte() {
+    // pyuff 2.5.8's `write_sets` of this dataset 151 (versions and file type 0, its defaults).
+    let pyuff = "    -1\n   151                                                                          \n\
+                 scan                                                                            \n\
+                 m/s per full-scale drive, through the calibration's inverse filters             \n\
+                 metaplate cal=abababababababababababababababababababababababababababababababab  \n\
+                 28-Nov-26 06:30:00           0         0         0\n\
+                 28-Nov-26 06:31:00  \n\
+                 metaplate 0.9.0                                                                 \n\
+                 29-Nov-26 07:00:00  \n    -1\n";
+    let stamp = |date: &str, time: &str| [date.to_owned(), time.to_owned()];
+    let header = metaplate_uff::Header151 {
+        model_name: "scan".into(),
+        description: "m/s per full-scale drive, through the calibration's inverse filters".into(),
+        db_program: format!("metaplate cal={}", "ab".repeat(32)),
+        db_created: stamp("28-Nov-26", "06:30:00"),
+        db_saved: stamp("28-Nov-26", "06:31:00"),
+        program: "metaplate 0.9.0".into(),
+        file_written: stamp("29-Nov-26", "07:00:00"),
+    };
+    let mut ours = Vec::new();
+    UffEncoder::new(Format::Ascii, Precision::Double)
+        .encode(&UffRecord::Header(Box::new(header.clone())), &mut ours)
+        .unwrap();
+    assert_same_text(&ours, pyuff.as_bytes());
+    assert_eq!(decode(pyuff.as_bytes()), vec![Ok(UffRecord::Header(Box::new(header)))]);
+}
+
+#[test]
 fn ascii_files_are_pyuffs_byte_for_byte() {
     let cases = [
         ("time_real_double_ascii.uff", Precision::Double, FunctionType::TimeResponse, Ordinate::Real(real_values())),

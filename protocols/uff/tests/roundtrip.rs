@@ -15,8 +15,8 @@ use crate::common;
 
 use common::decode_in_chunks;
 use metaplate_uff::{
-    AxisCharacteristics, ByteOrder, Complex64, Dof, Format, Function58, FunctionHeader, FunctionType, Node, Nodes2411,
-    Ordinate, Precision, UffEncoder, UffRecord, Units164,
+    AxisCharacteristics, ByteOrder, Complex64, Dof, Format, Function58, FunctionHeader, FunctionType, Header151, Node,
+    Nodes2411, Ordinate, Precision, UffEncoder, UffRecord, Units164,
 };
 use proptest::prelude::*;
 
@@ -180,6 +180,29 @@ proptest! {
                 }
             }
         }
+    }
+
+    #[test]
+    fn headers_round_trip_exactly(
+        names in prop::array::uniform4(text(80)),
+        stamps in prop::array::uniform6(text(10)),
+        chunk in 1usize..300,
+    ) {
+        let [model_name, description, db_program, program] = names;
+        let [a, b, c, d, e, f] = stamps;
+        let written = UffRecord::Header(Box::new(Header151 {
+            model_name,
+            description,
+            db_program,
+            db_created: [a, b],
+            db_saved: [c, d],
+            program,
+            file_written: [e, f],
+        }));
+        let mut bytes = Vec::new();
+        UffEncoder::new(Format::Ascii, Precision::Single).encode(&written, &mut bytes).unwrap();
+        let read: Vec<UffRecord> = decode_in_chunks(&bytes, chunk).into_iter().map(|r| r.unwrap()).collect();
+        prop_assert_eq!(read, vec![written]);
     }
 
     #[test]

@@ -46,6 +46,49 @@ fn ascii58(reference: &str, values_lines: &str) -> String {
 }
 
 #[test]
+fn headers_are_read_as_their_writers_filled_them() {
+    // LMS Test.Lab (TestLab_161_164_18_15_82.uff of the corpus): the identifier line padded to 80 columns, dates
+    // and times in one field, a trailing blank.
+    let lms = "    -1\n   151                                                                          \nAME_Test\nNONE\n\
+               LMS Test.Lab Rev project-15A\n11-Oct-17 09:34:21\n11-Oct-17 09:34:21\nLMS Test.Lab Rev project-15A\n\
+               17-Oct-17 13:50:13 \n    -1\n";
+    let results = read(lms.as_bytes());
+    let Ok(UffRecord::Header(header)) = &results[0] else { panic!("{results:?}") };
+    assert_eq!((header.model_name.as_str(), header.description.as_str()), ("AME_Test", "NONE"));
+    assert_eq!(header.db_program, "LMS Test.Lab Rev project-15A");
+    assert_eq!(header.db_created, ["11-Oct-17".to_owned(), "09:34:21".to_owned()]);
+    assert_eq!(header.file_written, ["17-Oct-17".to_owned(), "13:50:13".to_owned()]);
+    // A VKI writer (heat_engine_housing.uff): blank names, no dates but a version on record 4, the program's name
+    // with a date, record 7 shifted by a column; and a header of one record, one of nine, and one with a line past
+    // 80 columns: read, never refused.
+    let vki = "    -1\n   151\n \nNONE\nNONE\n                             0\n                    \n\
+               VKI 453 24-Feb-23 22:10:15\n 24-Feb-23  22:10:15  453\n    -1\n";
+    let long = format!("    -1\n   151\n{}\n    -1\n", "x".repeat(300));
+    let nine = format!("    -1\n   151\n{}    -1\n", "line\n".repeat(9));
+    for text in [vki, "    -1\n   151\nonly a name\n    -1\n", &long, &nine] {
+        let results = read(text.as_bytes());
+        let [Ok(UffRecord::Header(header))] = &results[..] else { panic!("{text}: {results:?}") };
+        // What was read is what the encoder writes, and reads back the same.
+        let mut out = Vec::new();
+        UffEncoder::new(Format::Ascii, Precision::Single).encode(&results[0].clone().unwrap(), &mut out).unwrap();
+        assert_eq!(read(&out), results, "{text}");
+        assert!(header.model_name.len() <= 80);
+    }
+    let results = read(vki.as_bytes());
+    let Ok(UffRecord::Header(header)) = &results[0] else { panic!("{results:?}") };
+    assert_eq!((header.model_name.as_str(), header.db_program.as_str()), ("NONE", "NONE"));
+    assert_eq!(header.db_created, ["NONE".to_owned(), "NONE".to_owned()]);
+    assert_eq!(header.program, "VKI 453 24-Feb-23 22:10:15");
+    assert_eq!(header.file_written, ["24-Feb-23".to_owned(), "22:10:15".to_owned()]);
+    let results = read(b"    -1\n   151\nonly a name\n    -1\n");
+    let Ok(UffRecord::Header(header)) = &results[0] else { panic!("{results:?}") };
+    assert_eq!((header.model_name.as_str(), header.program.as_str()), ("only a name", "NONE"), "records missing");
+    let results = read(long.as_bytes());
+    let Ok(UffRecord::Header(header)) = &results[0] else { panic!("{results:?}") };
+    assert_eq!(header.model_name, "x".repeat(80), "cut to record 1's 80 columns");
+}
+
+#[test]
 fn lms_units_without_temperature_mode_are_read() {
     let text = "    -1\n   164\n         9USER_DEFINED\n  1.00000000000000000D+00  1.00000000000000000D+00  \
                 1.00000000000000000D+00\n -2.73149999999999960D+02\n    -1\n";

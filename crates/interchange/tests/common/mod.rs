@@ -22,9 +22,16 @@ pub fn scene() -> Scene {
 
 /// A 4 x 3 dataset of `actuators` actuators in `dir`: decaying, deterministic responses with a quality on every row,
 /// `pre_samples` before time 0 and `ir_unit` as its description says.
+/// The content hash of the calibration [`dataset`]'s scan names.
+pub const CALIBRATION: &str = "sha256:5d41402abc4b2a76b9719d911017c592aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa";
+
+/// The unit of a scan through a calibration (as the recipes write it).
+pub const SCAN_UNIT: &str = "m/s per full-scale drive, through the calibration's inverse filters";
+
 pub fn dataset(dir: &Path, actuators: u16, pre_samples: u32, ir_unit: &str) -> PathBuf {
     let grid = GridSpec::centred(4, 3, 0.005);
-    let config = serde_json::json!({"synthetic": true}).as_object().cloned().unwrap();
+    // A scan's configuration names the calibration it was measured through.
+    let config = serde_json::json!({"synthetic": true, "calibration": CALIBRATION}).as_object().cloned().unwrap();
     let meta = DatasetMeta::new("scan", config, scene().id(), "test", 7, grid)
         .with_description(DatasetDescription { ir_unit: ir_unit.into(), pre_samples });
     let data = dir.join("original");

@@ -1,5 +1,6 @@
 """Prints, as JSON on stdout, what pyuff reads from a universal file: per dataset 58 its response and reference
-node and direction, ordinate data type, abscissa step and values (complex as [re, im] pairs); per dataset 2411 its nodes.
+node and direction, ordinate data type, abscissa step and values (complex as [re, im] pairs); per dataset 2411 its nodes;
+dataset 151's model name, description and programs.
 
     read_uff_values.py FILE
 """
@@ -10,7 +11,7 @@ import sys
 import numpy as np
 import pyuff
 
-out = {"functions": [], "nodes": {}}
+out = {"functions": [], "nodes": {}, "headers": []}
 for s in pyuff.UFF(sys.argv[1]).read_sets():
     if s["type"] == 58:
         data = np.asarray(s["data"])
@@ -23,6 +24,8 @@ for s in pyuff.UFF(sys.argv[1]).read_sets():
             "abscissa_inc": float(s["abscissa_inc"]),
             "values": values,
         })
+    elif s["type"] == 151:
+        out["headers"].append({k: s[k] for k in ("model_name", "description", "db_app", "program")})
     elif s["type"] == 2411:
         for label, x, y, z in zip(s["node_nums"], s["x"], s["y"], s["z"]):
             out["nodes"][str(int(label))] = [float(x), float(y), float(z)]

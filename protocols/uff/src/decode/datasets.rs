@@ -1,17 +1,32 @@
-//! The dataset records the decoder reads: units (164), nodes (2411) and functions at nodal DOF (58 and 58b): each
-//! step takes one line (or the binary block) of its dataset and says what the state machine does next.
+//! The dataset records the decoder reads: header (151), units (164), nodes (2411) and functions at nodal DOF (58 and
+//! 58b): each step takes one line (or the binary block) of its dataset and says what the state machine does next.
 
 use num_complex::Complex64;
 
 use super::{BinaryHeader, Layout, State, Step, UffDecoder};
 use crate::encode::{ByteOrder, Precision};
 use crate::error::{DecodeError, Location, Malformed, excerpt};
-use crate::fortran::{columns, parse_real, parse_text, trim};
+use crate::fortran::{columns, parse_line_text, parse_real, parse_text, trim};
 use crate::model::{
-    AxisCharacteristics, Dof, Function58, FunctionHeader, FunctionType, Node, Nodes2411, Ordinate, UffRecord, Units164,
+    AxisCharacteristics, Dof, Function58, FunctionHeader, FunctionType, Header151, Node, Nodes2411, Ordinate,
+    UffRecord, Units164,
 };
 
 impl UffDecoder {
+    /// Dataset 151: each of the 7 records is the text of its line, whatever it holds (lines after the seventh are
+    /// stepped over); at the closing delimiter, the records missing are "NONE".
+    pub(super) fn step_header(&mut self, mut records: Vec<Vec<u8>>, line: &[u8], is_delimiter: bool) -> Step {
+        if !is_delimiter {
+            if records.len() < 7 {
+                records.push(columns(line, 0, 80).to_vec());
+            }
+            self.state = State::Header { records };
+            return Step::Again;
+        }
+        self.state = State::Between { garbage: false };
+        Step::Emit(Ok(UffRecord::Header(Box::new(header151(&records)))))
+    }
+
     pub(super) fn step_units(
         &mut self,
         record1: Option<(u32, String, Option<u32>)>,
@@ -183,7 +198,7 @@ impl UffDecoder {
     /// Records 1 to 11 of dataset 58 (`lines[0]` is record 1). On error: the index of the record's line and what.
     fn function_header(&self, lines: &[Vec<u8>]) -> Result<(FunctionHeader, Layout), (usize, Malformed)> {
         let line = |i: usize| lines.get(i).map_or(&[][..], |l| l.as_slice());
-        let id_lines = [0, 1, 2, 3, 4].map(|i| parse_text(columns(line(i), 0, 80)));
+        let id_lines = [0, 1, 2, 3, 4].map(|i| parse_line_text(line(i)));
         // UffRecord 6: Format(2(I5,I10),2(1X,10A1,I10,I4)).
         let r6 = line(5);
         let at = |kind| (5, kind);
@@ -284,23 +299,27 @@ impl UffDecoder {
             Precision::Single => (13, "E13.5"),
             Precision::Double => (20, "E20.12"),
         };
-        let values = match ValueSplit::of(line, width) {
-            Ok(split) => split,
-            Err(start) => return self.fail(self.field_error("data value", line, start, width, format)),
-        };
-        for value in values.iter(line) {
+        let mut values = std::mem::take(&mut self.line_values);
+        if let Err(start) = parse_values(line, width, &mut values) {
+            self.line_values = values;
+            return self.fail(self.field_error("data value", line, start, width, format));
+        }
+        for &value in &values {
             if reals.len() as u64 >= layout.reals {
                 // Several writers pad the last line with zeros past the count record 7 announces.
                 if value == 0.0 {
                     continue;
                 }
+                self.line_values = values;
                 return self.fail(Malformed::TooManyValues { expected: layout.reals });
             }
             if !value.is_finite() {
+                self.line_values = values;
                 return self.fail(Malformed::NonFinite { index: reals.len() as u64, value });
             }
             reals.push(value);
         }
+        self.line_values = values;
         if reals.len() as u64 == layout.reals {
             self.state = State::Closing { record: Box::new(function(*header, layout, reals)), blank_allowed: false };
         } else {
@@ -358,50 +377,53 @@ impl UffDecoder {
     }
 }
 
-/// How a line of ASCII values splits into numbers.
-#[derive(Debug, Clone, Copy)]
-enum ValueSplit {
-    /// Blank-separated words.
-    Words,
-    /// Fixed columns of `width`, in the first `end` bytes of the line.
-    Columns { width: usize, end: usize },
-}
-
-impl ValueSplit {
-    /// The split that reads every number of `line`, or the first column (0-based) of a field that is no number.
-    fn of(line: &[u8], width: usize) -> Result<Self, usize> {
-        if words(line).all(|word| parse_real(word).is_some()) {
-            return Ok(ValueSplit::Words);
+/// The numbers of a line of ASCII values into `out` (cleared first), each parsed once: its blank-separated words when
+/// they are all numbers, else fixed columns of `width` up to the first blank field, after which nothing but blanks
+/// may follow. `Err` with the first column (0-based) of a field that is no number.
+fn parse_values(line: &[u8], width: usize, out: &mut Vec<f64>) -> Result<(), usize> {
+    out.clear();
+    for word in words(line) {
+        match parse_real(word) {
+            Some(value) => out.push(value),
+            None => break,
         }
-        let mut start = 0;
-        while start < line.len() {
-            let field = columns(line, start, width);
-            if trim(field).is_empty() {
-                // Blank columns end the values of a line; nothing but blanks may follow.
-                let rest_blank = trim(columns(line, start, usize::MAX)).is_empty();
-                return if rest_blank { Ok(ValueSplit::Columns { width, end: start }) } else { Err(start) };
-            }
-            if parse_real(field).is_none() {
-                return Err(start);
-            }
-            start += width;
+    }
+    if out.len() == words(line).count() {
+        return Ok(());
+    }
+    out.clear();
+    let mut start = 0;
+    while start < line.len() {
+        let field = columns(line, start, width);
+        if trim(field).is_empty() {
+            // Blank columns end the values of a line; nothing but blanks may follow.
+            return if trim(columns(line, start, usize::MAX)).is_empty() { Ok(()) } else { Err(start) };
         }
-        Ok(ValueSplit::Columns { width, end: line.len() })
+        out.push(parse_real(field).ok_or(start)?);
+        start += width;
     }
-
-    /// The numbers of `line` (whose split [`ValueSplit::of`] found).
-    fn iter(self, line: &[u8]) -> impl Iterator<Item = f64> + '_ {
-        let (by_words, by_columns) = match self {
-            ValueSplit::Words => (Some(words(line)), None),
-            ValueSplit::Columns { width, end } => (None, Some(line.get(..end).unwrap_or(line).chunks(width.max(1)))),
-        };
-        by_words.into_iter().flatten().chain(by_columns.into_iter().flatten()).filter_map(parse_real)
-    }
+    Ok(())
 }
 
 /// The blank-separated words of a line.
 fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {
     line.split(|&b| b == b' ' || b == b'\t').filter(|w| !w.is_empty())
+}
+
+/// Dataset 151 from its records as read (missing ones "NONE").
+fn header151(records: &[Vec<u8>]) -> Header151 {
+    let record = |i: usize| records.get(i).map_or(&[][..], Vec::as_slice);
+    let text = |i: usize| parse_line_text(record(i));
+    let stamp = |i: usize| [parse_text(columns(record(i), 0, 10)), parse_text(columns(record(i), 10, 10))];
+    Header151 {
+        model_name: text(0),
+        description: text(1),
+        db_program: text(2),
+        db_created: stamp(3),
+        db_saved: stamp(4),
+        program: text(5),
+        file_written: stamp(6),
+    }
 }
 
 fn function(header: FunctionHeader, layout: Layout, reals: Vec<f64>) -> UffRecord {

@@ -53,6 +53,10 @@ enum State {
     AfterSkip,
     /// After an opening delimiter: expecting the identifier line (dataset number, `b` for binary).
     Identifier,
+    /// Dataset 151: the records read so far (at most 7), each cut to its 80 columns.
+    Header {
+        records: Vec<Vec<u8>>,
+    },
     Units {
         record1: Option<(u32, String, Option<u32>)>,
         factors: Vec<f64>,
@@ -108,6 +112,7 @@ impl State {
         match self {
             State::Between { .. } | State::AfterSkip | State::Skip => "the delimiter `    -1`",
             State::Identifier => "the identifier line (dataset number)",
+            State::Header { .. } => "the records of dataset 151",
             State::Units { .. } => "the records of dataset 164",
             State::Nodes { .. } => "the records of dataset 2411",
             State::FunctionHeader { .. } => "the header records of dataset 58",
@@ -166,6 +171,8 @@ pub struct UffDecoder {
     function_types: Option<Vec<u32>>,
     truncation_reported: bool,
     state: State,
+    /// The numbers of the ASCII line being read (reused from line to line).
+    line_values: Vec<f64>,
 }
 
 impl Default for UffDecoder {
@@ -195,6 +202,7 @@ impl UffDecoder {
             cr_only: None,
             function_types: None,
             truncation_reported: false,
+            line_values: Vec::new(),
             state: State::Between { garbage: false },
         }
     }
@@ -506,6 +514,7 @@ impl UffDecoder {
                 self.state = State::OtherBinary { other, ascii_lines: ascii_lines.saturating_sub(1), bytes };
                 Step::Again
             }
+            State::Header { records } => self.step_header(records, &line, is_delimiter),
             State::Units { record1, factors } => self.step_units(record1, factors, &line, is_delimiter),
             State::Nodes { nodes, pending } => self.step_nodes(nodes, pending, &line, is_delimiter),
             State::FunctionHeader { binary, mut lines } => {
@@ -607,6 +616,7 @@ impl UffDecoder {
             (164 | 2411, Some(_)) => {
                 return self.fail(Malformed::Unsupported { what: format!("binary dataset {number}") });
             }
+            (151, None) => State::Header { records: Vec::with_capacity(7) },
             (164, None) => State::Units { record1: None, factors: Vec::with_capacity(4) },
             (2411, None) => State::Nodes { nodes: Vec::new(), pending: None },
             (_, Some(header)) => State::OtherBinary { other, ascii_lines: header.ascii_lines, bytes: header.bytes },
