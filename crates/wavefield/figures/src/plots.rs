@@ -88,6 +88,8 @@ enum Look {
 struct Panel {
     title: String,
     x_desc: &'static str,
+    /// Named positions on the x axis (ticks labelled by name, for example a band diagram's Γ, X, M); empty: numbers.
+    x_names: &'static [(f64, &'static str)],
     y_desc: &'static str,
     log_y: bool,
     series: Vec<Series>,
@@ -112,6 +114,53 @@ impl Figure for Stack {
     }
 }
 
+/// Where the legend goes so that it hides no point: the first corner (upper right, upper left, lower right, lower
+/// left) whose box, as large as the legend's labels make it, holds no point of the panel; when every corner holds
+/// some, upper right with the y axis raised until the points under the box sit below it. Returns the corner and the
+/// top of the y axis (plotted units). `size` is the panel's area in pixels.
+fn place_legend(
+    size: (u32, u32),
+    panel: &Panel,
+    series: &[(Points, Bars)],
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> (SeriesLabelPosition, f64) {
+    let labels: Vec<&str> = panel.series.iter().map(|s| s.label.as_str()).filter(|l| !l.is_empty()).collect();
+    if labels.is_empty() {
+        return (SeriesLabelPosition::UpperRight, y1);
+    }
+    // The plotting area without the caption, labels and margins (as `draw_panel` builds it), and the legend's box
+    // in its fractions: 14-pixel labels about 7.5 pixels a character, 19 pixels a line, plus the swatch and padding.
+    let plot_w = (f64::from(size.0) - 80.0 - 24.0).max(1.0);
+    let plot_h = (f64::from(size.1) - 45.0 - 30.0 - 24.0).max(1.0);
+    let chars = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+    let w = ((chars as f64 * 7.5 + 50.0) / plot_w).min(1.0);
+    let h = ((labels.len() as f64 * 19.0 + 16.0) / plot_h).min(0.9);
+    let points: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|(p, b)| p.iter().copied().chain(b.iter().flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)])))
+        .map(|(x, y)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0)))
+        .collect();
+    let corners = [
+        (SeriesLabelPosition::UpperRight, (1.0 - w, 1.0), (1.0 - h, 1.0)),
+        (SeriesLabelPosition::UpperLeft, (0.0, w), (1.0 - h, 1.0)),
+        (SeriesLabelPosition::LowerRight, (1.0 - w, 1.0), (0.0, h)),
+        (SeriesLabelPosition::LowerLeft, (0.0, w), (0.0, h)),
+    ];
+    let inside = |&(x, y): &(f64, f64), (xa, xb): (f64, f64), (ya, yb): (f64, f64)| {
+        (xa - 0.04..=xb + 0.04).contains(&x) && (ya - 0.04..=yb + 0.04).contains(&y)
+    };
+    for (corner, xs, ys) in corners {
+        if !points.iter().any(|p| inside(p, xs, ys)) {
+            return (corner, y1);
+        }
+    }
+    // Raise the top so that the highest point under the box's columns ends below the box.
+    let highest = points.iter().filter(|p| p.0 >= 1.0 - w - 0.04).map(|p| p.1).fold(0.0, f64::max);
+    let raised = y0 + (y1 - y0) * highest / (1.0 - h - 0.05).max(0.1);
+    (SeriesLabelPosition::UpperRight, y1.max(raised))
+}
+
 fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) -> Result<(), String> {
     let ty = |y: f64| if panel.log_y { if y > 0.0 { y.log10() } else { f64::NAN } } else { y };
     let finite = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
@@ -134,15 +183,27 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
     let (Some((x0, x1)), Some((y0, y1))) = (axis_range(xs, 0.03), axis_range(ys, 0.08)) else {
         return Err("no finite point to plot".to_owned());
     };
+    let (legend_at, y1) = place_legend(area.dim_in_pixel(), panel, &series, (x0, x1), (y0, y1));
+    let x_axis = if panel.x_names.is_empty() {
+        Ticked::linear(x0, x1)
+    } else {
+        let at: Vec<f64> = panel.x_names.iter().map(|n| n.0).collect();
+        Ticked { lo: x0, hi: x1, labelled: at.clone(), grid: at }
+    };
     let mut chart = ChartBuilder::on(area)
         .caption(&panel.title, (FONT, 20))
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(80)
-        .build_cartesian_2d(x0..x1, if panel.log_y { Ticked::log(y0, y1) } else { Ticked::linear(y0, y1) })
+        .build_cartesian_2d(x_axis, if panel.log_y { Ticked::log(y0, y1) } else { Ticked::linear(y0, y1) })
         .map_err(|e| e.to_string())?;
     let log_y = panel.log_y;
     let y_fmt = move |v: &f64| if log_y { plain_number(10f64.powf(*v)) } else { plain_number(*v) };
+    let names = panel.x_names;
+    let x_fmt = move |v: &f64| match names.iter().find(|n| (n.0 - v).abs() < 1e-9) {
+        Some(n) => n.1.to_owned(),
+        None => plain_number(*v),
+    };
     chart
         .configure_mesh()
         .x_desc(panel.x_desc)
@@ -150,7 +211,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
         .label_style((FONT, 14))
         .axis_desc_style((FONT, 15))
         .y_label_formatter(&y_fmt)
-        .x_label_formatter(&|v: &f64| plain_number(*v))
+        .x_label_formatter(&x_fmt)
         .draw()
         .map_err(|e| e.to_string())?;
     // Measured series take the palette in order; reference marks take it in order too, so that the k-th set of
@@ -225,7 +286,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
         .label_font((FONT, 14))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
+        .position(legend_at)
         .draw()
         .map_err(|e| e.to_string())
 }
@@ -303,6 +364,7 @@ pub fn wavelength(
     let panel = Panel {
         title: title.to_owned(),
         x_desc: "frequency (Hz)",
+        x_names: &[],
         y_desc: "wavelength (cm)",
         log_y: false,
         series: out,
@@ -333,6 +395,7 @@ pub fn pod_energy(dir: &Path, name: &str, series: &[Curve]) -> Result<Written, F
         Panel {
             title: "POD component energy".to_owned(),
             x_desc: "component",
+            x_names: &[],
             y_desc: "normalised energy",
             log_y: true,
             series: energy,
@@ -340,6 +403,7 @@ pub fn pod_energy(dir: &Path, name: &str, series: &[Curve]) -> Result<Written, F
         Panel {
             title: "Cumulative POD energy".to_owned(),
             x_desc: "component",
+            x_names: &[],
             y_desc: "cumulative energy (%)",
             log_y: false,
             series: cumulative,
@@ -374,6 +438,7 @@ pub fn singular_value_energy(dir: &Path, name: &str, series: &[SingularValueSeri
     let panel = Panel {
         title: "Relative singular-value energy of G_D (band average)".to_owned(),
         x_desc: "singular value index",
+        x_names: &[],
         y_desc: "energy (dB re sigma_1^2)",
         log_y: false,
         series: out,
@@ -404,6 +469,7 @@ pub fn condition_numbers(
     let panel = Panel {
         title: title.to_owned(),
         x_desc: "domain edge (cm)",
+        x_names: &[],
         y_desc: "condition number",
         log_y: true,
         series: all,
@@ -421,6 +487,7 @@ pub fn driven_response(dir: &Path, name: &str, series: &[Curve]) -> Result<Writt
     let panel = Panel {
         title: "Mean driven response".to_owned(),
         x_desc: "frequency (Hz)",
+        x_names: &[],
         y_desc: "mean |G|",
         log_y: true,
         series: series.iter().map(|c| plain(&c.label, c.points.clone())).collect(),
@@ -487,7 +554,8 @@ pub fn band_structure(dir: &Path, name: &str, figure: &BandFigure) -> Result<Wri
     let panels = vec![
         Panel {
             title: figure.title.clone(),
-            x_desc: "wave vector along Γ-X-M-Γ (X at 1, M at 2, Γ at 3.41; π/a)",
+            x_desc: "wave vector along Γ-X-M-Γ (π/a)",
+            x_names: &[(0.0, "Γ"), (1.0, "X"), (2.0, "M"), (2.0 + std::f64::consts::SQRT_2, "Γ")],
             y_desc: "frequency (Hz)",
             log_y: false,
             series: bands,
@@ -495,6 +563,7 @@ pub fn band_structure(dir: &Path, name: &str, figure: &BandFigure) -> Result<Wri
         Panel {
             title: "Phase velocity".to_owned(),
             x_desc: "frequency (Hz)",
+            x_names: &[],
             y_desc: "phase velocity (m/s)",
             log_y: true,
             series: with_a0(&figure.phase_velocity, &figure.a0_phase_velocity, 1.0),
@@ -502,6 +571,7 @@ pub fn band_structure(dir: &Path, name: &str, figure: &BandFigure) -> Result<Wri
         Panel {
             title: "Wavelength".to_owned(),
             x_desc: "frequency (Hz)",
+            x_names: &[],
             y_desc: "wavelength (cm)",
             log_y: true,
             series: with_a0(&figure.wavelength, &figure.a0_wavelength, 100.0),
@@ -512,7 +582,38 @@ pub fn band_structure(dir: &Path, name: &str, figure: &BandFigure) -> Result<Wri
 
 #[cfg(test)]
 mod tests {
+    use plotters::prelude::SeriesLabelPosition;
+
+    use super::{Look, Panel, Series, place_legend};
     use crate::render::{log_ticks, plain_number};
+
+    #[test]
+    fn the_legend_takes_a_free_corner_or_raises_the_axis_above_the_points() {
+        let place = |points: &[(f64, f64)]| {
+            let series =
+                Series { label: "a label".into(), points: points.to_vec(), bars: Vec::new(), look: Look::Dots };
+            let panel = Panel {
+                title: String::new(),
+                x_desc: "",
+                x_names: &[],
+                y_desc: "",
+                log_y: false,
+                series: vec![series],
+            };
+            place_legend((900, 500), &panel, &[(points.to_vec(), Vec::new())], (0.0, 10.0), (0.0, 10.0))
+        };
+        // Upper right and lower left taken: the legend goes upper left, the axis as it was.
+        let (at, top) = place(&[(9.5, 9.5), (0.5, 0.5)]);
+        assert!(matches!(at, SeriesLabelPosition::UpperLeft) && top == 10.0);
+        let (at, _) = place(&[(9.5, 9.5), (0.5, 9.5)]);
+        assert!(matches!(at, SeriesLabelPosition::LowerRight));
+        // Every corner taken: upper right, the top raised so that the highest point under it ends below the box
+        // (one line of 19 pixels and 16 of padding in a plotting area 401 pixels high, and a margin of 5 %).
+        let (at, top) = place(&[(0.5, 9.5), (9.5, 9.5), (0.5, 0.5), (9.5, 0.5)]);
+        assert!(matches!(at, SeriesLabelPosition::UpperRight));
+        let box_bottom = 1.0 - 35.0 / 401.0 - 0.05;
+        assert!((9.5 / top - box_bottom).abs() < 1e-12, "top {top}");
+    }
 
     #[test]
     fn log_ticks_fall_at_plain_values() {

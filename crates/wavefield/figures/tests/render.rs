@@ -7,8 +7,8 @@ use std::path::Path;
 
 use metaplate_core::grid::GridSpec;
 use metaplate_figures::{
-    Curve, FigureError, PlateOverlay, SingularValueSeries, WavelengthReferences, WavelengthSeries, Written,
-    condition_numbers, driven_response, focus_animation, focus_snapshots, pixel_area_map, pod_energy,
+    BandFigure, Curve, FigureError, PlateOverlay, SingularValueSeries, WavelengthReferences, WavelengthSeries, Written,
+    band_structure, condition_numbers, driven_response, focus_animation, focus_snapshots, pixel_area_map, pod_energy,
     singular_value_energy, wavelength,
 };
 
@@ -89,6 +89,25 @@ fn line_figures_render_to_png_and_svg() {
 
     let response = [curve("metamaterial", |f| 1e-3 / f, freqs.iter().copied())];
     check(&driven_response(d, "response", &response).unwrap(), &["frequency (Hz)", "mean |G|"]);
+
+    // The band diagram's axis names the path's corners, Γ at both ends.
+    let path: Vec<f64> = (0..=34).map(|i| f64::from(i) * 0.1).collect();
+    let band = BandFigure {
+        title: "Band structure of a cell".into(),
+        branches: vec![curve("m = 1", |x| 100.0 * x, path.iter().copied())],
+        a0_folded: vec![curve("A0, homogeneous plate (folded)", |x| 300.0 * x, path.iter().copied())],
+        resonator_hz: Some(500.0),
+        phase_velocity: vec![curve("m = 1", |f| f / 50.0, freqs.iter().copied())],
+        wavelength: vec![curve("m = 1", |f| 10.0 / f, freqs.iter().copied())],
+        a0_phase_velocity: None,
+        a0_wavelength: None,
+    };
+    let written = band_structure(d, "band", &band).unwrap();
+    check(&written, &["wave vector along Γ-X-M-Γ (π/a)", "phase velocity (m/s)", "clamped-cell resonator mode"]);
+    let svg = std::fs::read_to_string(&written.svg).unwrap();
+    // Each tick label is a text element of its own line.
+    let count = |label: &str| svg.lines().filter(|l| *l == label).count();
+    assert_eq!((count("Γ"), count("X"), count("M")), (2, 1, 1), "the path's corners");
 }
 
 #[test]
