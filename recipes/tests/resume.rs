@@ -142,6 +142,7 @@ fn a_resume_on_other_wiring_is_refused_naming_it() {
         "{rig_recorded}"
     );
     assert_eq!(rig_recorded["wiring"]["loopback_channel"], 8, "{rig_recorded}");
+    assert_eq!(rig_recorded["aim"], "the mock lab's beam (in-process, no mirrors or stages)", "{rig_recorded}");
 
     // The same lab with actuators 0 and 1 cabled the other way round.
     let (lab, _) = common::lab_and_plan(&scene, 7, 5);

@@ -54,6 +54,10 @@ fn a_point_beyond_the_outputs_is_refused_before_anything_moves() {
     assert!(matches!(aimer.check_reachable(f64::NAN, 0.0), Err(AimError::InvalidArgument { .. })));
     assert_eq!(mirrors.volts(), None, "nothing was written");
     assert_eq!(clock.now_s(), 0.0, "nothing waited");
+    // The rig record names the fit and the outputs.
+    let described = aimer.describe();
+    assert!(described.starts_with("galvo mirrors (projective fit of 9 points, residual rms "), "{described}");
+    assert!(described.ends_with(" mm) on the mock lab's galvo mirrors (+/- 10 V)"), "{described}");
     // The plate's corners are within reach.
     aimer.check_reachable(0.12, -0.06).expect("reachable");
 }

@@ -51,4 +51,8 @@ impl Aim for LabAimer {
             None => Ok(()),
         }
     }
+
+    fn describe(&self) -> String {
+        "the mock lab's beam (in-process, no mirrors or stages)".to_owned()
+    }
 }

@@ -8,7 +8,8 @@ use serde_json::{Map, Value, json};
 
 use crate::error::RecipeError;
 
-/// The rig as the configuration's `rig` object: `vibrometer`, `daq` and `audio` identities and `wiring`.
+/// The rig as the configuration's `rig` object: `vibrometer`, `daq` and `audio` identities, what aims the beam
+/// (`aim`, in words: [`metaplate_core::aim::Aim::describe`]) and `wiring`.
 ///
 /// # Errors
 /// [`RecipeError::Vibrometer`] when the vibrometer does not answer its identity query (the DAQ's and the audio
@@ -21,6 +22,7 @@ pub fn rig_config(rig: &mut Rig) -> Result<Value, RecipeError> {
         "vibrometer": {"vendor": ldv.vendor, "model": ldv.model, "serial": ldv.serial, "firmware": ldv.firmware},
         "daq": {"vendor": daq.vendor, "model": daq.model, "serial": daq.serial, "firmware": daq.firmware},
         "audio": {"vendor": audio.vendor, "model": audio.model, "serial": audio.serial, "firmware": audio.firmware},
+        "aim": rig.aim.describe(),
         "wiring": wiring_json(&rig.wiring),
     }))
 }

@@ -73,6 +73,11 @@ pub trait Aim {
     /// # Errors
     /// `Disconnected` when the aimer cannot be reopened (yet); any error of aiming again.
     fn reconnect(&mut self) -> Result<(), AimError>;
+
+    /// What aims the beam, for the dataset's rig record (for example "galvo mirrors (projective fit of 6 points,
+    /// residual rms 0.041 mm) on NI USB-6211 s/n 01A2B3C4 ao0, ao1"): what identifies the aimer and its setup
+    /// across reconnects, never a link's transient name (a pseudo-terminal's path).
+    fn describe(&self) -> String;
 }
 
 /// Two analog outputs holding a static voltage each: what drives a pair of galvanometer mirrors (an NI DAQ's AO
@@ -117,6 +122,10 @@ impl Aim for NoAimer {
 
     fn reconnect(&mut self) -> Result<(), AimError> {
         Ok(())
+    }
+
+    fn describe(&self) -> String {
+        "none".to_owned()
     }
 }
 

@@ -58,18 +58,6 @@ impl GalvoAimer {
         &self.fit
     }
 
-    /// What drives the mirrors, for the dataset's rig record.
-    pub fn describe(&self) -> String {
-        let r = self.fit.residual();
-        format!(
-            "galvo mirrors ({} fit of {} points, residual rms {:.3} mm) on {}",
-            self.fit.model().name(),
-            self.fit.points().len(),
-            r.rms_mm,
-            self.outputs.describe()
-        )
-    }
-
     /// The voltages for (`x_m`, `y_m`), V, checked against the outputs' range.
     ///
     /// # Errors
@@ -116,5 +104,17 @@ impl Aim for GalvoAimer {
             self.clock.sleep_s(self.settings.settle_s);
         }
         Ok(())
+    }
+
+    /// The fit (model, points, residual) and the outputs that drive the mirrors.
+    fn describe(&self) -> String {
+        let r = self.fit.residual();
+        format!(
+            "galvo mirrors ({} fit of {} points, residual rms {:.3} mm) on {}",
+            self.fit.model().name(),
+            self.fit.points().len(),
+            r.rms_mm,
+            self.outputs.describe()
+        )
     }
 }

@@ -261,21 +261,6 @@ impl<L: SerialLine> ZaberStages<L> {
         }
         Ok((plate_m[0], plate_m[1]))
     }
-
-    /// The stages for the dataset's rig record, for example "Zaber stages moving the head on /dev/ttyUSB0: x device 1
-    /// axis 1 (0.000 to 100.000 mm), y device 2 axis 1 (0.000 to 100.000 mm)".
-    pub fn describe(&self) -> String {
-        let moving = match self.config.moving {
-            MovingPart::Head => "the head",
-            MovingPart::Plate => "the plate",
-        };
-        let axes: Vec<String> = self
-            .axes
-            .iter()
-            .map(|a| format!("{} device {} axis {} ({})", a.name, a.config.device, a.config.axis, a.describe_travel()))
-            .collect();
-        format!("Zaber stages moving {moving} on {:?}: {}", self.config.port, axes.join(", "))
-    }
 }
 
 impl<L: SerialLine> Aim for ZaberStages<L> {
@@ -297,5 +282,20 @@ impl<L: SerialLine> Aim for ZaberStages<L> {
             self.move_to(x_m, y_m)?;
         }
         Ok(())
+    }
+
+    /// For example "Zaber stages moving the head: x device 1 axis 1 (0.000 to 100.000 mm), y device 2 axis 1
+    /// (0.000 to 100.000 mm)" (not the port: a pseudo-terminal's name changes from run to run).
+    fn describe(&self) -> String {
+        let moving = match self.config.moving {
+            MovingPart::Head => "the head",
+            MovingPart::Plate => "the plate",
+        };
+        let axes: Vec<String> = self
+            .axes
+            .iter()
+            .map(|a| format!("{} device {} axis {} ({})", a.name, a.config.device, a.config.axis, a.describe_travel()))
+            .collect();
+        format!("Zaber stages moving {moving}: {}", axes.join(", "))
     }
 }
