@@ -285,7 +285,7 @@ pub fn stimuli_report(
             if options.figures.is_some() {
                 panels.push(stimulus_panel(dataset, experiment, stimulus, &waveforms, &at_point, level));
             }
-            let within = rendered.peaks_within(&dataset.manifest().meta.grid, options.fingertip_radius_m)?;
+            let within = rendered.peaks_within(&dataset.manifest().meta, options.fingertip_radius_m)?;
             let true_peaks = match truth {
                 Some(t) => Some(true_peaks_mm_s(t, e, rendered, level, dataset.sample_rate_hz())?),
                 None => None,

@@ -19,9 +19,8 @@
 use std::fmt::Write as _;
 use std::str::FromStr;
 
-use metaplate_core::grid::GridSpec;
 use metaplate_dsp::kirkeby::KirkebyFilter;
-use metaplate_store::Dataset;
+use metaplate_store::{Dataset, DatasetMeta};
 use serde::Serialize;
 
 use crate::error::ControlError;
@@ -241,26 +240,21 @@ impl Rendered {
         predicted_field(&self.g, &self.drives, Some(&rows), self.factor)
     }
 
-    /// Per pixel, the largest |v| over one period at any measured point within `radius_m` of its point on `grid`
-    /// (the point itself included), in the units of [`Rendered::field_at_pixels`]: what a fingertip resting there
-    /// feels rather than the field at one point (a null is a point; beside it the field can be large).
+    /// Per pixel, the largest |v| over one period at any measured point within `radius_m` of its point (the point
+    /// itself included), the points where `meta` places them (on its grid, or scattered), in the units of
+    /// [`Rendered::field_at_pixels`]: what a fingertip resting there feels rather than the field at one point (a null
+    /// is a point; beside it the field can be large).
     ///
     /// # Errors
-    /// A pixel's point off `grid`, a negative or non-finite radius, and [`predicted_field`]'s errors.
-    pub fn peaks_within(&self, grid: &GridSpec, radius_m: f64) -> Result<Vec<f64>, ControlError> {
+    /// A point `meta` does not place, a negative or non-finite radius, and [`predicted_field`]'s errors.
+    pub fn peaks_within(&self, meta: &DatasetMeta, radius_m: f64) -> Result<Vec<f64>, ControlError> {
         if !(radius_m.is_finite() && radius_m >= 0.0) {
             return Err(ControlError::InvalidParameter {
                 name: "radius_m",
                 reason: format!("a radius of {radius_m} m (must be finite and >= 0)"),
             });
         }
-        let position = |p: u32| -> Result<(f64, f64), ControlError> {
-            if (p as usize) < grid.len() {
-                Ok(grid.position_m(p as usize))
-            } else {
-                Err(ControlError::UnknownPoint { point_index: p })
-            }
-        };
+        let position = |p: u32| meta.position_m(p as usize).ok_or(ControlError::UnknownPoint { point_index: p });
         let mut near: Vec<Vec<usize>> = Vec::with_capacity(self.points.len());
         let mut rows: Vec<usize> = Vec::new();
         for &pixel in &self.points {

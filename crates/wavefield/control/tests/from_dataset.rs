@@ -1,12 +1,15 @@
 //! `PropagationMatrices::from_dataset` against a direct FFT of the stored impulse responses; pixels snapped to the
-//! same small dataset.
+//! same small dataset; a fingertip's reach around a pixel measured where the points are, on the grid or scattered.
 
 #![allow(clippy::unwrap_used)] // tests may unwrap
 
+use metaplate_control::focus::{PixelSpec, RenderOptions, render};
 use metaplate_control::pixels::PointSelection;
 use metaplate_control::{ControlError, PropagationMatrices};
 use metaplate_dsp::fft;
-use metaplate_store::{Dataset, DatasetMeta, DatasetWriter, GridSpec, IfExists, IrMeta, IrRecord, SceneId};
+use metaplate_store::{
+    Dataset, DatasetMeta, DatasetWriter, GridSpec, IfExists, IrMeta, IrRecord, ScatteredPoints, SceneId,
+};
 
 const IR_LEN: usize = 64;
 const FS_HZ: f64 = 24_000.0;
@@ -22,17 +25,15 @@ fn ir(point: u32, actuator: u16) -> Vec<f32> {
         .collect()
 }
 
+/// The metadata of a test dataset on `grid`.
+fn meta(grid: GridSpec) -> DatasetMeta {
+    DatasetMeta::new("test", serde_json::Map::new(), SceneId { name: "none".into(), hash: "0".into() }, "0", 1, grid)
+}
+
 /// A 4 x 3 grid with three points measured by three actuators (0, 2, 5), written in two batches.
 fn write_dataset(dir: &std::path::Path) -> Dataset {
     let grid = GridSpec { nx: 4, ny: 3, spacing_m: 0.005, origin_x_m: 0.0, origin_y_m: 0.0 };
-    let meta = DatasetMeta::new(
-        "test",
-        serde_json::Map::new(),
-        SceneId { name: "none".into(), hash: "0".into() },
-        "0",
-        1,
-        grid,
-    );
+    let meta = meta(grid);
     let mut writer = DatasetWriter::create(dir, meta, IfExists::Refuse).unwrap();
     for batch in [&[(0, 0), (3, 1)][..], &[(1, 2)][..]] {
         let mut records = Vec::new();
@@ -172,4 +173,60 @@ fn points_are_selected_by_their_worst_rows_estimated_error() {
     // G over the kept points only.
     let g = PropagationMatrices::from_dataset(&dataset, (1000.0, 5000.0), Some(&s.kept)).unwrap();
     assert_eq!(g.points(), [0, 9]);
+}
+
+/// The dataset of [`write_dataset`] written again with its three points (0, 7, 9) as scattered points 0, 1, 2, 0.1 m
+/// apart on a line: the same responses, positions that are not the grid's.
+fn write_scattered(dir: &std::path::Path, from: &Dataset) -> Dataset {
+    let positions_m = vec![(0.0, 0.0), (0.1, 0.0), (0.2, 0.0)];
+    let grid = GridSpec { nx: 3, ny: 1, spacing_m: 0.005, origin_x_m: 0.0, origin_y_m: 0.0 };
+    let meta = meta(grid).with_scattered(ScatteredPoints { positions_m: positions_m.clone(), frame: "a test".into() });
+    let mut writer = DatasetWriter::create(dir, meta, IfExists::Refuse).unwrap();
+    let records: Vec<IrRecord> = from
+        .rows()
+        .iter()
+        .map(|m| {
+            let index = [0, 7, 9].iter().position(|&p| p == m.point_index).unwrap();
+            let mut meta = *m;
+            (meta.point_index, meta.ix, meta.iy) = (index as u32, index as u32, 0);
+            (meta.x_m, meta.y_m) = positions_m[index];
+            IrRecord { ir: from.ir(m.point_index, m.actuator).unwrap().to_vec(), meta }
+        })
+        .collect();
+    writer.commit_batch(&records).unwrap();
+    writer.finish().unwrap();
+    Dataset::open(dir).unwrap()
+}
+
+#[test]
+fn a_fingertips_reach_is_measured_where_the_points_are() {
+    let dir = tempfile::tempdir().unwrap();
+    let on_grid = write_dataset(&dir.path().join("grid"));
+    let scattered = write_scattered(&dir.path().join("scattered"), &on_grid);
+    let options = RenderOptions { band_lo_hz: 1000.0, band_hi_hz: 5000.0, ..RenderOptions::default() };
+    // A null at the first point, an impulse at the second: beside the null the field is larger than at it.
+    let render = |dataset: &Dataset, at: [(f64, f64); 2]| {
+        let specs: Vec<PixelSpec> = [format!("{},{}:null", at[0].0, at[0].1), format!("{},{}", at[1].0, at[1].1)]
+            .map(|t| t.parse().unwrap())
+            .into();
+        let rendered = render(dataset, &specs, None, &options).unwrap();
+        let own: Vec<f64> = rendered
+            .field_at_pixels()
+            .unwrap()
+            .iter()
+            .map(|v| v.iter().fold(0.0, |m: f64, x| m.max(x.abs())))
+            .collect();
+        (rendered, own)
+    };
+    // On the grid, point 9 (5, 10 mm) is 11.2 mm from point 0: within a 12 mm reach of the null.
+    let (rendered, own) = render(&on_grid, [(0.0, 0.0), (0.015, 0.005)]);
+    let within = rendered.peaks_within(&on_grid.manifest().meta, 0.012).unwrap();
+    assert!(within[0] > own[0], "the reach of the null takes in its neighbour: {within:?} vs {own:?}");
+    // Scattered 0.1 m apart, the null's reach holds itself alone (the grid index would put a neighbour 5 mm away).
+    let (rendered, own) = render(&scattered, [(0.0, 0.0), (0.1, 0.0)]);
+    let within = rendered.peaks_within(&scattered.manifest().meta, 0.012).unwrap();
+    assert_eq!(within, own, "each pixel's reach is its own point");
+    // A reach over every point takes the largest field anywhere, on both.
+    let all = rendered.peaks_within(&scattered.manifest().meta, 1.0).unwrap();
+    assert!(all.iter().all(|&v| v >= own[0].max(own[1])), "{all:?}");
 }
