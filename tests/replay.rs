@@ -93,6 +93,9 @@ fn damaged_cassettes_and_bad_faults_are_clear_errors() {
     let out = metaplate(&["replay", cut.to_str().unwrap()]);
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(!out.status.success() && err.contains("truncated") && !err.contains("panicked"), "{err}");
+    // The defect is said once (it was repeated as the error and as its source).
+    assert_eq!(err.matches("cassette truncated").count(), 1, "{err}");
+    assert!(err.contains(": bad cassette: cassette truncated after "), "{err}");
     // Lenient: the exchanges before the cut replay, and the summary names the defect.
     let out = metaplate(&["replay", "--lenient", cut.to_str().unwrap()]);
     let text = String::from_utf8(out.stdout).unwrap();

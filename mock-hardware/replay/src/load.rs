@@ -17,8 +17,9 @@ pub enum ReplayError {
         /// The operating system's error.
         source: std::io::Error,
     },
-    /// The cassette is damaged: no readable header, or (in strict loading) any bad or missing part.
-    #[error("bad cassette: {0}")]
+    /// The cassette is damaged: no readable header, or (in strict loading) any bad or missing part (the defect is
+    /// the error's source, which the binary prints after it).
+    #[error("bad cassette")]
     Cassette(#[from] CassetteError),
     /// The cassette was recorded with another kind of device than the replay transport plays.
     #[error("the cassette holds a {found:?} session, not {expected:?}")]
