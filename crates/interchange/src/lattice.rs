@@ -10,6 +10,7 @@
 //! share a node.
 
 use metaplate_core::grid::{GridSpec, MAX_GRID_POINTS};
+use metaplate_core::points::{median_distance_m, nearest_neighbours};
 
 /// Largest distance of a point from its lattice node accepted, in spacings (a scan head's positioning and a mesh
 /// written with 6 digits sit far below it; a point between two nodes lies half a spacing off).
@@ -180,23 +181,6 @@ pub fn plane(points_m: &[[f64; 3]]) -> (Frame, f64) {
     (frame, plane_rms_m)
 }
 
-/// Each point's nearest neighbour among `flat` (m): its distance, m, and direction, radians (infinite distance
-/// for a lone point). Pairwise: `O(n²)`, which [`MAX_LATTICE_POINTS`] bounds.
-pub fn nearest_neighbours(flat: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    let mut nearest = Vec::with_capacity(flat.len());
-    for (i, a) in flat.iter().enumerate() {
-        let mut best = (f64::INFINITY, 0.0);
-        for (j, b) in flat.iter().enumerate() {
-            let d = (b.0 - a.0).hypot(b.1 - a.1);
-            if j != i && d < best.0 {
-                best = (d, (b.1 - a.1).atan2(b.0 - a.0));
-            }
-        }
-        nearest.push(best);
-    }
-    nearest
-}
-
 /// The lattice the 3-D points `points_m` lie on, or why not.
 ///
 /// # Errors
@@ -214,13 +198,13 @@ pub fn fit(points_m: &[[f64; 3]]) -> Result<Lattice, String> {
     let (mut frame, plane_rms_m) = plane(points_m);
     let flat: Vec<(f64, f64)> = points_m.iter().map(|&p| frame.place(p)).collect();
     let nearest = nearest_neighbours(&flat);
-    if nearest.iter().any(|&(d, _)| d <= 0.0) {
+    if nearest.iter().any(|n| n.distance_m <= 0.0) {
         return Err("two points are at one position".into());
     }
-    let mut distances: Vec<f64> = nearest.iter().map(|&(d, _)| d).collect();
-    distances.sort_unstable_by(f64::total_cmp);
-    let mut spacing = distances[n / 2];
-    let (s4, c4) = nearest.iter().fold((0.0, 0.0), |(s, c), &(_, phi)| (s + (4.0 * phi).sin(), c + (4.0 * phi).cos()));
+    let Some(mut spacing) = median_distance_m(&nearest) else { return Err("the points have no spacing".into()) };
+    let (s4, c4) = nearest
+        .iter()
+        .fold((0.0, 0.0), |(s, c), n| (s + (4.0 * n.direction_rad).sin(), c + (4.0 * n.direction_rad).cos()));
     frame.rotation_rad = s4.atan2(c4) / 4.0;
     let rotated: Vec<(f64, f64)> = points_m.iter().map(|&p| frame.place(p)).collect();
     let x0 = rotated.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);

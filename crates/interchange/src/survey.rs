@@ -483,16 +483,16 @@ fn scattered(points: &[[f64; 3]], in_xy: bool, not_lattice: &str) -> Result<Plac
     } else {
         points.iter().map(|&p| frame.place(p)).collect()
     };
-    let nearest = lattice::nearest_neighbours(&in_plane);
-    if let Some(i) = nearest.iter().position(|&(d, _)| d <= 0.0) {
+    let nearest = metaplate_core::points::nearest_neighbours(&in_plane);
+    if let Some(i) = nearest.iter().position(|n| n.distance_m <= 0.0) {
         refuse!(
             "response nodes {i} and another of the {n} (in label order) lie at one position in their plane: \
              distinct positions are accepted"
         );
     }
-    let mut distances: Vec<f64> = nearest.iter().map(|&(d, _)| d).collect();
-    distances.sort_unstable_by(f64::total_cmp);
-    let spacing_m = distances[n / 2];
+    let Some(spacing_m) = metaplate_core::points::median_distance_m(&nearest) else {
+        refuse!("the {n} response nodes have no spacing: scattered points are at least two distinct positions")
+    };
     let frame_text = if in_xy {
         "the plane z = const of the nodes, x and y as given".to_owned()
     } else {

@@ -56,6 +56,7 @@ pub mod clock;
 pub mod daq;
 pub mod grid;
 pub mod hash;
+pub mod points;
 pub mod rig;
 pub mod rng;
 pub mod scene;

@@ -22,6 +22,7 @@
 
 use metaplate_control::PropagationMatrices;
 use metaplate_core::grid::GridSpec;
+use metaplate_core::points::median_spacing_m;
 use num_complex::Complex64;
 use serde::Serialize;
 
@@ -352,25 +353,6 @@ pub fn interpolate_g(g: &PropagationMatrices, weights: &LatticeWeights) -> Resul
     let nodes = weights.nodes.iter().map(|&(node, _)| node).collect();
     PropagationMatrices::from_parts(g.bins(), g.fft_len(), g.sample_rate_hz(), nodes, g.actuators().to_vec(), data)
         .map_err(|e| AnalysisError::Step { step: "interpolating G(omega) onto a lattice", reason: e.to_string() })
-}
-
-/// The median distance from each point to its nearest neighbour, m (`O(n²)`); `None` for fewer than two points.
-pub fn median_spacing_m(points_m: &[(f64, f64)]) -> Option<f64> {
-    let mut nearest: Vec<f64> = points_m
-        .iter()
-        .enumerate()
-        .map(|(i, a)| {
-            points_m
-                .iter()
-                .enumerate()
-                .filter(|&(j, _)| j != i)
-                .map(|(_, b)| (b.0 - a.0).hypot(b.1 - a.1))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .filter(|d| d.is_finite() && *d > 0.0)
-        .collect();
-    nearest.sort_unstable_by(f64::total_cmp);
-    nearest.get(nearest.len() / 2).copied()
 }
 
 #[cfg(test)]
