@@ -175,6 +175,21 @@ pub fn draft_hardware_file(listings: &[Listing], path: &Path) -> Result<String, 
             chain.value
         );
     }
+    if let Some(ni) = listings.iter().flat_map(|l| &l.found).find(|f| f.key == "daq.device") {
+        // An NI device: galvo mirrors on two of its analog outputs, commented out until their map is taught.
+        let _ = write!(
+            text,
+            "\n# NI-DAQmx device {value} found{}.\n\
+             # CHOOSE: uncomment to aim galvo mirrors with two of its analog outputs, after teaching their map with\n\
+             # `metaplate aim teach --hardware FILE`.\n\
+             # [aim]\n# backend = \"galvo\"\n# fit = \"galvo-fit.toml\"   # written by `aim teach`, relative to this file\n\
+             # settle_ms = 2.0\n# [aim.outputs]\n# backend = \"nidaqmx\"\n# device = \"{value}\"\n\
+             # x_channel = \"ao0\"   # CHECK: the outputs cabled to the X and Y mirror drivers\n\
+             # y_channel = \"ao1\"\n# limit_v = 10.0   # CHECK: the mirror drivers' input range, +/- V\n",
+            described(ni),
+            value = ni.value
+        );
+    }
     text.push_str(
         "\n[wiring]   # CHECK every line against the cabling\n\
          actuator_channels = [0, 1, 2, 3, 4, 5, 6, 7]   # audio channel of each actuator, in the plate's order\n\
@@ -205,6 +220,31 @@ mod tests {
         // Sections in key order: `aim` (which lists nothing: its outputs are listed as what they are) first.
         assert!(json.starts_with("{\"aim\":[{\"backend\":\"galvo\",\"found\":[],\"in_this_build\":true"), "{json}");
         assert!(json.contains("\"audio\":[{\"backend\":\"alsa\",\"found\":[],\"in_this_build\":"), "{json}");
+    }
+
+    #[test]
+    fn an_ni_device_drafts_galvo_mirrors_on_its_outputs_that_parse_once_uncommented() {
+        let mut listings: Vec<Listing> =
+            BACKENDS.iter().map(|backend| Listing { backend, found: Vec::new(), problem: None }).collect();
+        let ni = Found { key: "daq.device", value: "Dev2".into(), description: "USB-6211 s/n 01A2B3C4".into() };
+        let at = listings.iter().position(|l| l.backend.name == "nidaqmx").unwrap();
+        listings[at].found = vec![ni];
+        let text = draft_hardware_file(&listings, Path::new("draft.toml")).unwrap();
+        assert!(text.contains("device = \"Dev2\"   # CHECK: the only one found"), "the DAQ on it: {text}");
+        assert!(text.contains("# NI-DAQmx device Dev2 found: USB-6211 s/n 01A2B3C4.\n# CHOOSE: uncomment"), "{text}");
+        // The galvo section uncommented (from its `[aim]` to the end of the commented block) is a valid `[aim]` on
+        // the same device.
+        let mut inside = false;
+        let uncommented: String = text
+            .lines()
+            .map(|line| {
+                inside = (inside || line == "# [aim]") && line.starts_with("# ");
+                format!("{}\n", if inside { &line[2..] } else { line })
+            })
+            .collect();
+        assert!(uncommented.contains("[aim.outputs]\nbackend = \"nidaqmx\"\ndevice = \"Dev2\"\n"), "{uncommented}");
+        let file = HardwareFile::parse(&uncommented, Path::new("draft.toml")).unwrap();
+        assert!(file.aim.is_some(), "{uncommented}");
     }
 
     #[test]
