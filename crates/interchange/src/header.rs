@@ -83,14 +83,10 @@ fn is_hex256(text: &str) -> bool {
     text.len() == 64 && text.bytes().all(|b| b.is_ascii_hexdigit())
 }
 
-/// `text` as a record of 80 printable Latin-1 characters: others as `_`, cut at 80, and never a lone `-1` (a line
-/// that reads as the dataset's closing delimiter).
+/// `text` as a record of 80 printable Latin-1 characters ([`metaplate_uff::printable`]), and never a lone `-1` (a
+/// line that reads as the dataset's closing delimiter, which the encoder refuses).
 fn text(text: &str) -> String {
-    let mut out: String = text
-        .chars()
-        .map(|c| if matches!(u32::from(c), 0x20..=0x7e | 0xa0..=0xff) { c } else { '_' })
-        .take(80)
-        .collect();
+    let mut out = metaplate_uff::printable(text, 80);
     if out.trim() == "-1" {
         out = out.replace('-', "_");
     }

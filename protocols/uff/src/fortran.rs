@@ -125,6 +125,12 @@ pub(crate) fn parse_line_text(line: &[u8]) -> String {
     if text == "-1" { "(-1)".to_owned() } else { text }
 }
 
+/// `text` as a text field of at most `width` characters can hold it: each character that is not printable Latin-1
+/// as `_`, then cut to `width` (what a writer does with a name it did not choose, where [`latin1`] refuses).
+pub fn printable(text: &str, width: usize) -> String {
+    text.chars().map(|c| if u8::try_from(u32::from(c)).is_ok_and(is_text_byte) { c } else { '_' }).take(width).collect()
+}
+
 /// Whether a byte is printable Latin-1 (a text field's bytes).
 fn is_text_byte(b: u8) -> bool {
     (0x20..=0x7e).contains(&b) || b >= 0xa0
@@ -174,6 +180,9 @@ mod tests {
         assert_eq!(latin1("m/s\u{b2}"), Some(b"m/s\xb2".to_vec()));
         assert_eq!(latin1("\u{20ac}"), None);
         assert_eq!(parse_text(b"    "), "NONE");
+        assert_eq!(printable("caf\u{e9} \u{20ac}\u{7}", 80), "caf\u{e9} __");
+        assert_eq!(printable(&"\u{e9}".repeat(90), 80).chars().count(), 80);
+        assert_eq!(printable("", 80), "");
         assert_eq!(parse_line_text(format!("-1{}x", " ".repeat(80)).as_bytes()), "(-1)");
         assert_eq!(parse_line_text(b" -12"), "-12");
     }

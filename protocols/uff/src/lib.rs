@@ -125,6 +125,7 @@ mod model;
 pub use decode::{Limits, UffDecoder};
 pub use encode::{ByteOrder, Format, Precision, UffEncoder};
 pub use error::{DecodeError, EncodeError, Location, Malformed};
+pub use fortran::printable;
 pub use model::{
     AxisCharacteristics, Dof, Function58, FunctionHeader, FunctionType, Header151, Node, Nodes2411, Ordinate,
     OrdinateRef, OtherDataset, UffRecord, Units164,

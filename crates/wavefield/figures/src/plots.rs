@@ -114,6 +114,14 @@ impl Figure for Stack {
     }
 }
 
+/// A panel's layout, pixels: its caption's font, margin, axis label areas and legend font (`draw_panel` draws with
+/// them, `place_legend` sizes the legend's box from them).
+const CAPTION_FONT_PX: u32 = 20;
+const PANEL_MARGIN_PX: u32 = 12;
+const X_LABEL_AREA_PX: u32 = 45;
+const Y_LABEL_AREA_PX: u32 = 80;
+const LEGEND_FONT_PX: u32 = 14;
+
 /// Where the legend goes so that it hides no point: the first corner (upper right, upper left, lower right, lower
 /// left) whose box, as large as the legend's labels make it, holds no point of the panel; when every corner holds
 /// some, upper right with the y axis raised until the points under the box sit below it. Returns the corner and the
@@ -129,13 +137,17 @@ fn place_legend(
     if labels.is_empty() {
         return (SeriesLabelPosition::UpperRight, y1);
     }
-    // The plotting area without the caption, labels and margins (as `draw_panel` builds it), and the legend's box
-    // in its fractions: 14-pixel labels about 7.5 pixels a character, 19 pixels a line, plus the swatch and padding.
-    let plot_w = (f64::from(size.0) - 80.0 - 24.0).max(1.0);
-    let plot_h = (f64::from(size.1) - 45.0 - 30.0 - 24.0).max(1.0);
+    // The plotting area without the caption (its font and half again), labels and margins, as `draw_panel` builds
+    // it; the legend's box in its fractions: a character about 0.54 of the legend's font, a line 1.36 of it (19
+    // pixels at 14), plus the swatch and padding.
+    let margins = f64::from(2 * PANEL_MARGIN_PX);
+    let plot_w = (f64::from(size.0) - f64::from(Y_LABEL_AREA_PX) - margins).max(1.0);
+    let caption = 1.5 * f64::from(CAPTION_FONT_PX);
+    let plot_h = (f64::from(size.1) - f64::from(X_LABEL_AREA_PX) - caption - margins).max(1.0);
+    let font = f64::from(LEGEND_FONT_PX);
     let chars = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
-    let w = ((chars as f64 * 7.5 + 50.0) / plot_w).min(1.0);
-    let h = ((labels.len() as f64 * 19.0 + 16.0) / plot_h).min(0.9);
+    let w = ((chars as f64 * font * 15.0 / 28.0 + 50.0) / plot_w).min(1.0);
+    let h = ((labels.len() as f64 * font * 19.0 / 14.0 + 16.0) / plot_h).min(0.9);
     let points: Vec<(f64, f64)> = series
         .iter()
         .flat_map(|(p, b)| p.iter().copied().chain(b.iter().flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)])))
@@ -191,10 +203,10 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
         Ticked { lo: x0, hi: x1, labelled: at.clone(), grid: at }
     };
     let mut chart = ChartBuilder::on(area)
-        .caption(&panel.title, (FONT, 20))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(80)
+        .caption(&panel.title, (FONT, CAPTION_FONT_PX))
+        .margin(PANEL_MARGIN_PX)
+        .x_label_area_size(X_LABEL_AREA_PX)
+        .y_label_area_size(Y_LABEL_AREA_PX)
         .build_cartesian_2d(x_axis, if panel.log_y { Ticked::log(y0, y1) } else { Ticked::linear(y0, y1) })
         .map_err(|e| e.to_string())?;
     let log_y = panel.log_y;
@@ -283,7 +295,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
     }
     chart
         .configure_series_labels()
-        .label_font((FONT, 14))
+        .label_font((FONT, LEGEND_FONT_PX))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .position(legend_at)

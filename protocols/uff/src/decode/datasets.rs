@@ -382,13 +382,17 @@ impl UffDecoder {
 /// may follow. `Err` with the first column (0-based) of a field that is no number.
 fn parse_values(line: &[u8], width: usize, out: &mut Vec<f64>) -> Result<(), usize> {
     out.clear();
+    let mut every_word = true;
     for word in words(line) {
         match parse_real(word) {
             Some(value) => out.push(value),
-            None => break,
+            None => {
+                every_word = false;
+                break;
+            }
         }
     }
-    if out.len() == words(line).count() {
+    if every_word {
         return Ok(());
     }
     out.clear();
