@@ -37,8 +37,11 @@ fn value(precision: Precision) -> BoxedStrategy<f64> {
 
 fn text(max_len: usize) -> impl Strategy<Value = String> {
     // Printable Latin-1 (one byte a character in the file: `²`, `°`, `µ` as the I-DEAS era writes them) without
-    // leading or trailing blanks, which reading trims.
-    prop::string::string_regex(&format!("[!-~¡-ÿ]([ -~\\x{{a0}}-ÿ]{{0,{}}}[!-~¡-ÿ])?", max_len - 2)).unwrap()
+    // leading or trailing blanks, which reading trims; never `-1`, which a line of text cannot hold (it reads as the
+    // closing delimiter: the encoder refuses it, `EncodeError::Delimiter`).
+    prop::string::string_regex(&format!("[!-~¡-ÿ]([ -~\\x{{a0}}-ÿ]{{0,{}}}[!-~¡-ÿ])?", max_len - 2))
+        .unwrap()
+        .prop_filter("reads as the closing delimiter", |t| t != "-1")
 }
 
 fn axis() -> impl Strategy<Value = AxisCharacteristics> {
