@@ -117,7 +117,7 @@ fn band(args: &BandArgs) -> anyhow::Result<()> {
     }
     if let Some(dir) = &args.figures {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        metaplate_figures::band_structure(dir, "band_structure", &metaplate_design::band_figure(&design, &band))?;
+        metaplate_figures::band_structure(dir, "band_structure", &metaplate_figures::design_band(&design, &band))?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&band)?);

@@ -43,6 +43,7 @@
 
 mod accuracy;
 mod colour;
+mod design_band;
 mod field;
 mod glyphs;
 mod grid_svg;
@@ -53,6 +54,7 @@ mod stimuli;
 mod tradeoff;
 
 pub use accuracy::{AccuracyBar, accuracy};
+pub use design_band::design_band;
 pub use grid_svg::{CellStatus, snr_map_svg, status_map_svg};
 pub use maps::{PlateOverlay, focus_animation, focus_snapshots, pixel_area_map};
 pub use plots::{

@@ -2,7 +2,7 @@
 //! published figures: f_n = 781 Hz and the slow branch's top at 558 Hz within 5 %, its phase velocity under
 //! 10 m/s, its wavelengths 10 cm at 75 Hz and 1.1 cm at its top (558 Hz in the paper) within 10 %.
 
-use metaplate_design::{BandOptions, Design, PAPER_WAVELENGTH_FREQS_HZ, band_diagram, band_figure};
+use metaplate_design::{BandOptions, Design, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
 
 #[test]
 fn paper_design_meets_the_papers_figures() {
@@ -25,15 +25,6 @@ fn paper_design_meets_the_papers_figures() {
     // The slow branch is the rocking rod's: almost all of its kinetic energy is the resonator's away from Gamma.
     let x = &band.branches[0].points[band.path.iter().position(|p| p.path_position >= 1.0).unwrap()];
     assert!(x.plate_energy_share < 0.1, "plate share at X {}", x.plate_energy_share);
-    // Fig. 2C-D: c(f) and lambda(f) from Gamma outwards while the frequency rises, one value per frequency, not the
-    // path's legs drawn over each other; m = 1 reaches the branch's top.
-    let figure = band_figure(&design, &band);
-    for curve in figure.phase_velocity.iter().chain(&figure.wavelength) {
-        assert!(curve.points.len() > 5, "{}: {} points", curve.label, curve.points.len());
-        assert!(curve.points.windows(2).all(|w| w[1].0 > w[0].0), "{}: frequency rises", curve.label);
-    }
-    let m1_top_hz = figure.phase_velocity[0].points.last().unwrap().0;
-    assert!((m1_top_hz / slow.top_hz - 1.0).abs() < 1e-9, "m = 1 drawn to its top, {m1_top_hz} Hz");
     eprintln!(
         "paper: f_n {f_n:.1} Hz, top {:.1} Hz, c max {:.2} m/s, lambda(75 Hz) {:.2} cm, lambda(top) {:.2} cm",
         slow.top_hz,

@@ -29,6 +29,9 @@ pub enum DesignError {
         /// The solver's complaint.
         why: String,
     },
+    /// The homogenised model's fit to the cell's branch failed (parameters not finite and positive).
+    #[error("homogenised fit failed: {0}")]
+    Fit(String),
     /// A search's results could not be written or read, or do not fit together (another search's parts,
     /// designs missing from a merge).
     #[error("search results {path}: {why}")]

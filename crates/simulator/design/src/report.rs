@@ -43,6 +43,23 @@ impl BandDiagram {
         for w in &s.wavelength_m_at {
             let _ = writeln!(out, "  wavelength at {:.0} Hz: {}", w.freq_hz, cm(w.wavelength_m));
         }
+        if let Some(h) = &self.homogenised {
+            let _ = writeln!(
+                out,
+                "homogenised rocking rod (|k| a <= pi/2, {} points, {:.0} to {:.0} Hz): added mass {:.2} x rho h, \
+                 stiffness {:.3} x D, rotary inertia {:.3e} kg m^2 per cell, joint resonance {:.1} Hz; frequency \
+                 error max {:.2} %, rms {:.2} %",
+                h.points,
+                h.min_freq_hz,
+                h.max_freq_hz,
+                h.added_mass_ratio,
+                h.rigidity_factor,
+                h.rotary_inertia_kg_m2,
+                h.resonance_hz,
+                100.0 * h.max_relative_error,
+                100.0 * h.rms_relative_error
+            );
+        }
         let _ = writeln!(out);
         let _ = write!(out, "{:>4} {:>8} {:>9} {:>9}", "k#", "pos pi/a", "kx rad/m", "ky rad/m");
         for b in &self.branches {

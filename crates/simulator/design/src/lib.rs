@@ -5,6 +5,8 @@
 //! - [`band_diagram`]: eigenfrequencies along Gamma-X-M-Gamma, each branch's phase velocity `2 pi f / |k|` and
 //!   wavelength `2 pi / |k|`, each mode's share of kinetic energy in the plate, the slow branch (m = 1: its top,
 //!   highest phase velocity, wavelengths), the clamped cell's resonator mode, and the analytic A0 folded in.
+//! - [`fit_rocking_rod`]: the homogenised plate model (mass, stiffening, the rod's rocking inertia and joint
+//!   resonance) whose dispersion follows the slow branch where the lattice is fine against the wavelength.
 //!
 //! # Method
 //! Mindlin plate elements (9-node quadrilaterals on an O-grid around the rod's footprint), the footprint rigid,
@@ -16,7 +18,7 @@ mod band;
 mod bloch;
 mod elements;
 mod error;
-mod figure;
+mod homogenise;
 mod mesh;
 mod model;
 mod parquet;
@@ -30,7 +32,7 @@ pub use band::{
 };
 pub use bloch::{Mode, Reduction, Sides};
 pub use error::DesignError;
-pub use figure::band_figure;
+pub use homogenise::{HOMOGENISED_MAX_KA, RockingRodFit, fit_rocking_rod};
 pub use mesh::{Mesh, MeshOptions};
 pub use model::CellModel;
 pub use parquet::write_parquet;

@@ -207,6 +207,19 @@ impl Design {
         }
     }
 
+    /// The whole cell's mass, kg: the plate around the footprint, the footprint, and the resonator's moving mass.
+    pub fn cell_mass_kg(&self) -> f64 {
+        let a = self.lattice_constant_m;
+        let r = self.footprint_radius_m();
+        let around = (a * a - std::f64::consts::PI * r * r) * self.plate.areal_density_kg_m2();
+        let resonator = match &self.resonator {
+            ResonatorSpec::None => 0.0,
+            ResonatorSpec::Rod(rod) => rod.free_mass_kg(),
+            ResonatorSpec::SpringMass(s) => s.mass_kg,
+        };
+        around + self.footprint_mass_kg() + resonator
+    }
+
     /// A built-in design by name ([`BUILTIN_DESIGNS`]).
     pub fn builtin(name: &str) -> Option<Self> {
         (name == "paper").then(Self::paper)

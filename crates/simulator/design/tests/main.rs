@@ -5,6 +5,7 @@
 
 mod files;
 mod homogeneous;
+mod homogenised;
 mod paper;
 mod pwe;
 mod search;

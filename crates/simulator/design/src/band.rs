@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use crate::bloch::{Mode, Reduction, Sides};
 use crate::error::DesignError;
+use crate::homogenise::{RockingRodFit, fit_rocking_rod};
 use crate::mesh::MeshOptions;
 use crate::model::CellModel;
 use crate::spec::{Design, PlateSpec};
@@ -159,6 +160,9 @@ pub struct BandDiagram {
     pub slow_branch: SlowBranch,
     /// Reduced degrees of freedom of the Bloch problem (the model's size).
     pub degrees_of_freedom: usize,
+    /// The homogenised rocking rod fitted to the slow branch (rod designs, with at least 4 path points at
+    /// `|k| a <= pi / 2`).
+    pub homogenised: Option<RockingRodFit>,
 }
 
 /// Computes the band diagram of `design`, with the slow branch's wavelength at `wavelength_freqs_hz`.
@@ -193,6 +197,13 @@ pub fn band_diagram(
         .collect();
     let resonator_mode = clamped_resonator_mode(design, options.mesh)?;
     let slow_branch = slow_branch(&branches[0], wavelength_freqs_hz);
+    // Too few points near Gamma (a coarse path) leaves the fit out rather than failing the diagram.
+    let first: Vec<(f64, f64)> = branches[0].points.iter().map(|p| (p.kx_rad_m.hypot(p.ky_rad_m), p.freq_hz)).collect();
+    let homogenised = match fit_rocking_rod(design, &first) {
+        Ok(fit) => Some(fit),
+        Err(DesignError::Option(_)) => None,
+        Err(e) => return Err(e),
+    };
     Ok(BandDiagram {
         design: design.name.clone(),
         lattice_constant_m: a,
@@ -204,6 +215,7 @@ pub fn band_diagram(
         resonator_mode,
         slow_branch,
         degrees_of_freedom: reduction.len(),
+        homogenised,
     })
 }
 

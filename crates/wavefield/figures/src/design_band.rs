@@ -1,11 +1,10 @@
-//! The band diagram as the paper's Fig. 2B-D draws it, for `metaplate_figures::band_structure`.
+//! A unit cell's band diagram as the paper's Fig. 2B-D draws it, for [`crate::band_structure`].
 
-use metaplate_figures::{BandFigure, Curve};
+use metaplate_design::{BandDiagram, BranchPoint, Design};
 
-use crate::band::{BandDiagram, BranchPoint};
-use crate::spec::Design;
+use crate::plots::{BandFigure, Curve};
 
-/// Where Gamma-X-M ends on the path ([`crate::band::PathPoint::path_position`], units of pi/a: M at 2), with room for
+/// Where Gamma-X-M ends on the path ([`metaplate_design::PathPoint::path_position`], units of pi/a: M at 2), with room for
 /// rounding.
 const M_END: f64 = 2.0 + 1e-9;
 
@@ -14,7 +13,7 @@ const M_END: f64 = 2.0 + 1e-9;
 /// walking from Gamma along Gamma-X-M while the frequency rises (one value per frequency, as the slow branch's
 /// wavelengths are read: over the whole path each branch passes its frequencies two or three times; m = 1 reaches
 /// its top at M) with the analytic A0's.
-pub fn band_figure(design: &Design, band: &BandDiagram) -> BandFigure {
+pub fn design_band(design: &Design, band: &BandDiagram) -> BandFigure {
     let position = |i: usize| band.path[i].path_position;
     let f_max = band.branches.iter().take(2).flat_map(|b| b.points.iter().map(|p| p.freq_hz)).fold(0.0, f64::max);
     let clip_hz = 1.5 * f_max;
