@@ -16,6 +16,38 @@ fn scene_list_and_show() {
     assert!(String::from_utf8(out.stdout).unwrap().contains("thickness_m"));
 }
 
+/// A scene whose lattice names a design, next to its design file: `scene show` writes the design inline and says
+/// what the plate model takes from the cell.
+#[test]
+fn a_scene_naming_a_design_file_shows_the_cells_homogenised_rods() {
+    let dir = common::scratch("commands-cli", "designed-scene");
+    let good = String::from_utf8(metaplate(&["scene", "show", "metamaterial"]).stdout).unwrap();
+    let keyed = "pitch_m = 0.008\nrod_height_m = 0.0334\nrod_diameter_m = 0.003175\nrod_youngs_modulus_pa = 97000000000.0\n\
+                 rod_density_kg_m3 = 8489.0\n";
+    assert!(good.contains(keyed), "{good}");
+    let scene = good.replacen(keyed, "design = \"cell.toml\"\n", 1).replacen("gyration_radius_m = 0.011\n", "", 1);
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    let cell = String::from_utf8(metaplate(&["design", "band", "paper", "--json"]).stdout).unwrap();
+    assert!(cell.contains("\"homogenised\""), "{cell}");
+    std::fs::write(
+        dir.join("cell.toml"),
+        "name = \"mine\"\nlattice_constant_m = 0.008\n[plate]\nthickness_m = 0.0015\n\
+        youngs_modulus_pa = 3.2e9\npoisson_ratio = 0.37\ndensity_kg_m3 = 1180.0\n[resonator]\nkind = \"rod\"\n\
+        height_m = 0.0334563\ndiameter_m = 0.003175\nembedded_m = 0.0015\nyoungs_modulus_pa = 97e9\n\
+        poisson_ratio = 0.31\ndensity_kg_m3 = 8489.0\n",
+    )
+    .unwrap();
+    let out = metaplate(&["scene", "show", dir.join("scene.toml").to_str().unwrap()]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("[resonators.design]") && text.contains("name = \"mine\""), "{text}");
+    let fit = text
+        .lines()
+        .find(|l| l.starts_with("# rods from design `mine`, homogenised"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(fit.contains("joint resonance") && fit.contains("frequency error max"), "{fit}");
+}
+
 #[test]
 fn a_bad_scene_file_is_a_clear_error_not_a_panic() {
     let dir = common::scratch("commands-cli", "bad-scene");

@@ -4,8 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
+use metaplate_core::design::Design;
 use metaplate_design::search::{self, DesignResult, SearchSpec, Shard};
-use metaplate_design::{BandOptions, Design, MeshOptions, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
+use metaplate_design::{BandOptions, MeshOptions, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
 
 /// Subcommands of `metaplate design`.
 #[derive(Subcommand)]

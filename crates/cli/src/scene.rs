@@ -54,7 +54,7 @@ fn summary(scene: &Scene) -> Vec<String> {
         Ok(sites) => format!("{} rods every {} mm", sites.len(), scene.resonators.pitch_m * 1e3),
         Err(e) => format!("({e})"),
     };
-    vec![
+    let mut lines = vec![
         format!(
             "plate: {} x {} cm, {} mm thick",
             (x_max - x_min) * 100.0,
@@ -71,5 +71,25 @@ fn summary(scene: &Scene) -> Vec<String> {
         ),
         format!("actuators: {}; supports: {}; resonators: {rods}", scene.actuators.len(), scene.supports.len()),
         format!("scene id: {}", scene.id().hash),
-    ]
+    ];
+    if let Some(design) = &scene.resonators.design {
+        // The plate model's view of the rods: what the cell's band structure gave it, and how closely.
+        lines.push(match metaplate_plate::design_fit(design) {
+            Ok(fit) => format!(
+                "rods from design `{}`, homogenised: added mass {:.2} x rho h, stiffness {:.3} x D, rotary inertia \
+                 {:.3e} kg m^2 per rod, joint resonance {:.1} Hz (fitted {:.0} to {:.0} Hz, frequency error max \
+                 {:.2} %)",
+                design.name,
+                fit.added_mass_ratio,
+                fit.rigidity_factor,
+                fit.rotary_inertia_kg_m2,
+                fit.resonance_hz,
+                fit.min_freq_hz,
+                fit.max_freq_hz,
+                100.0 * fit.max_relative_error
+            ),
+            Err(e) => format!("rods from design `{}`: {e}", design.name),
+        });
+    }
+    lines
 }

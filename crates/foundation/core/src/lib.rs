@@ -54,6 +54,7 @@ pub mod aim;
 pub mod audio;
 pub mod clock;
 pub mod daq;
+pub mod design;
 pub mod grid;
 pub mod hash;
 pub mod points;

@@ -242,3 +242,31 @@ mod tests {
         assert_eq!(unit_of("loss_factor"), None);
     }
 }
+
+/// What can go wrong reading a TOML file that is not a scene (a unit-cell design, a design search): it cannot be read,
+/// or it is not valid, located by file, line and key.
+#[derive(Debug, thiserror::Error)]
+pub enum TomlFileError {
+    /// The file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not valid: where (file:line:column), which key, why.
+    #[error("{0}")]
+    Invalid(Located),
+}
+
+impl TomlFileError {
+    /// The text of the file at `path`.
+    ///
+    /// # Errors
+    /// [`TomlFileError::Io`] naming the file.
+    pub fn read(path: &std::path::Path) -> Result<String, Self> {
+        std::fs::read_to_string(path).map_err(|source| Self::Io { path: path.display().to_string(), source })
+    }
+}

@@ -198,7 +198,7 @@ fn resonator_lattice_and_mass_ratio() {
     let homo = Scene::builtin("homogeneous").unwrap();
     assert!(homo.resonators.lattice_sites_m(&homo.plate.outline).unwrap().is_empty());
     assert!(homo.resonators.cell_mass_ratio(homo.plate.mass_per_area_kg_m2()).is_err(), "0/0 is refused");
-    let tiny = ResonatorSpec { pitch_m: 1e-6, ..s.resonators };
+    let tiny = ResonatorSpec { pitch_m: 1e-6, ..s.resonators.clone() };
     assert!(tiny.lattice_sites_m(&s.plate.outline).is_err(), "3.75e10 rods exceed the limit");
 }
 
@@ -256,6 +256,55 @@ fn seed_beyond_toml_integers_is_refused() {
 fn mutate(from: &str, to: &str) -> String {
     assert!(METAMATERIAL.contains(from), "test setup: `{from}` is not in the scene");
     METAMATERIAL.replacen(from, to, 1)
+}
+
+/// The rods of the built-in metamaterial as its scene file gives them, key by key.
+const KEYED_RODS: &str = "pitch_m = 0.008\nrod_height_m = 0.0334\nrod_diameter_m = 0.003175\nrod_youngs_modulus_pa = 97e9\n\
+                          rod_density_kg_m3 = 8489.0\n";
+
+/// The metamaterial scene with its rods taken from the design `paper` instead (no rod key, no override), with its
+/// first `from` then replaced by `to`.
+fn designed(from: &str, to: &str) -> String {
+    let text = mutate(KEYED_RODS, "design = \"paper\"\n").replacen("gyration_radius_m = 0.011\n", "", 1);
+    assert!(text.contains(from), "test setup: `{from}` is not in the scene");
+    text.replacen(from, to, 1)
+}
+
+/// A lattice naming a design takes the lattice constant and the rods from it, with no override; the scene's text
+/// as written back holds the design inline (a dataset's copy stands alone) and reads back to the same scene; a
+/// design file is read relative to the scene file's folder.
+#[test]
+fn a_lattice_named_by_a_design_takes_its_rods_and_is_written_inline() {
+    let s = Scene::from_toml_str(&designed("", ""), "designed.toml").unwrap();
+    let paper = metaplate_core::design::Design::paper();
+    assert_eq!(s.resonators.design.as_ref(), Some(&paper));
+    assert_eq!(s.resonators.model, ResonatorModel::RockingRod);
+    assert_eq!(
+        (s.resonators.pitch_m, s.resonators.rod_height_m, s.resonators.rod_diameter_m),
+        (0.008, 0.0334563, 0.003175)
+    );
+    assert_eq!(
+        (s.resonators.mass_ratio, s.resonators.resonance_hz, s.resonators.gyration_radius_m),
+        (None, None, None)
+    );
+    assert_eq!((s.resonators.loss_factor, s.resonators.region_inset_m, s.resonators.height_spread), (0.01, 0.01, 0.01));
+    assert_eq!(s.resonators.lattice_sites_m(&s.plate.outline).unwrap().len(), 421);
+    let text = s.to_toml_string();
+    assert!(text.contains("[resonators.design]") && !text.contains("design = \"paper\""), "{text}");
+    assert_eq!(Scene::from_toml_str(&text, "written").unwrap(), s);
+    assert_eq!(toml::from_str::<Scene>(&text).unwrap(), s);
+    assert_ne!(s.id(), Scene::builtin("metamaterial").unwrap().id());
+    let dir = std::env::temp_dir().join(format!("metaplate-scene-design-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("cells")).unwrap();
+    std::fs::write(dir.join("cells/mine.toml"), toml::to_string(&paper).unwrap()).unwrap();
+    std::fs::write(dir.join("scene.toml"), designed("design = \"paper\"", "design = \"cells/mine.toml\"")).unwrap();
+    let from_file = Scene::load(&dir.join("scene.toml")).unwrap();
+    assert_eq!(from_file.resonators.design.as_ref(), Some(&paper));
+    // The same relative path with no scene folder to go by is looked for in the working directory: not found, and
+    // the message names the file.
+    let err = Scene::from_toml_str(&std::fs::read_to_string(dir.join("scene.toml")).unwrap(), "x.toml").unwrap_err();
+    assert!(err.to_string().contains("cells/mine.toml"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The metamaterial scene without the table whose header is `header` (up to the next blank line).
@@ -328,7 +377,37 @@ fn every_validation_error_names_file_key_and_reason() {
             "plate.outline.shape",
             "unknown variant `ellipse`",
         ),
-        (mutate("pitch_m = 0.008\n", ""), Kind::Schema, "resonators", "missing key `pitch_m`"),
+        (mutate("pitch_m = 0.008\n", ""), Kind::Invalid, "resonators.pitch_m", "missing key `pitch_m`"),
+        (
+            designed("design = \"paper\"", "design = \"no-such-cell.toml\""),
+            Kind::Invalid,
+            "resonators.design",
+            "cannot read no-such-cell.toml",
+        ),
+        (
+            designed("design = \"paper\"", "design = \"paper\"\nrod_diameter_m = 0.003"),
+            Kind::Invalid,
+            "resonators.rod_diameter_m",
+            "is given by the design",
+        ),
+        (
+            designed("design = \"paper\"", "design = \"paper\"\nresonance_hz = 500.0"),
+            Kind::Invalid,
+            "resonators.resonance_hz",
+            "taken from the design's cell",
+        ),
+        (
+            designed("model = \"rocking_rod\"", "model = \"added_mass\""),
+            Kind::Invalid,
+            "resonators.model",
+            "rocking_rod",
+        ),
+        (
+            designed("thickness_m = 0.0015", "thickness_m = 0.002"),
+            Kind::Invalid,
+            "plate.thickness_m",
+            "design `paper`'s plate has 0.0015",
+        ),
         (
             mutate("x_m = -0.0125\n", "x_m = -0.0125\nvoice_coil = { q = 3.0 }\n"),
             Kind::Schema,

@@ -4,7 +4,8 @@
 //! `cargo bench -p metaplate-design --bench band`
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use metaplate_design::{BandOptions, Design, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
+use metaplate_core::design::Design;
+use metaplate_design::{BandOptions, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
 
 fn paper_band(c: &mut Criterion) {
     let design = Design::paper();

@@ -5,7 +5,8 @@
 
 #![allow(clippy::expect_used)] // An example: a failure is reported by the panic.
 
-use metaplate_design::{BandOptions, Design, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
+use metaplate_core::design::Design;
+use metaplate_design::{BandOptions, PAPER_WAVELENGTH_FREQS_HZ, band_diagram};
 
 fn main() {
     let start = std::time::Instant::now();

@@ -6,7 +6,8 @@
 
 #![allow(clippy::expect_used)] // An example: a failure is reported by the panic.
 
-use metaplate_design::{CellModel, Design, MeshOptions, Reduction, Sides, clamped_resonator_mode, gamma_x_m_path};
+use metaplate_core::design::Design;
+use metaplate_design::{CellModel, MeshOptions, Reduction, Sides, clamped_resonator_mode, gamma_x_m_path};
 
 fn branches(design: &Design, mesh: MeshOptions, ks: &[(f64, f64)]) -> (usize, Vec<[f64; 3]>) {
     let model = CellModel::new(design, mesh);

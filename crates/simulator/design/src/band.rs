@@ -10,7 +10,7 @@ use crate::error::DesignError;
 use crate::homogenise::{RockingRodFit, fit_rocking_rod};
 use crate::mesh::MeshOptions;
 use crate::model::CellModel;
-use crate::spec::{Design, PlateSpec};
+use metaplate_core::design::{CellPlate, Design};
 
 /// Options of a band computation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -188,7 +188,8 @@ pub fn band_diagram(
     let model = CellModel::new(design, options.mesh);
     let reduction = Reduction::new(&model, Sides::Periodic)?;
     let path = gamma_x_m_path(a, options.wave_vectors);
-    let modes = solve_path(&model, &reduction, &path, options)?;
+    let wave_vectors: Vec<(f64, f64)> = path.iter().map(|p| (p.kx_rad_m, p.ky_rad_m)).collect();
+    let modes = reduction.solve_many(&model, &wave_vectors, options.modes, options.threads)?;
     let branches: Vec<Branch> = (0..options.modes.min(reduction.len()))
         .map(|j| Branch {
             mode: j + 1,
@@ -233,50 +234,13 @@ fn branch_point(p: &PathPoint, mode: Mode) -> BranchPoint {
     }
 }
 
-/// Solves every wave vector, spread over threads (each solve is independent).
-fn solve_path(
-    model: &CellModel,
-    reduction: &Reduction,
-    path: &[PathPoint],
-    options: &BandOptions,
-) -> Result<Vec<Vec<Mode>>, DesignError> {
-    let threads = match options.threads {
-        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-        n => n,
-    }
-    .clamp(1, path.len());
-    let chunk = path.len().div_ceil(threads);
-    let results: Vec<Result<Vec<Vec<Mode>>, DesignError>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = path
-            .chunks(chunk)
-            .map(|points| {
-                scope.spawn(move || {
-                    points.iter().map(|p| reduction.solve(model, p.kx_rad_m, p.ky_rad_m, options.modes)).collect()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| {
-                h.join()
-                    .unwrap_or_else(|_| Err(DesignError::Eigen { at: "worker thread".into(), why: "panicked".into() }))
-            })
-            .collect()
-    });
-    let mut all = Vec::with_capacity(path.len());
-    for r in results {
-        all.extend(r?);
-    }
-    Ok(all)
-}
-
 /// The first resonator-associated mode of the cell with its sides fixed: the lowest mode with at least half of
 /// its kinetic energy in the resonator; `None` without a resonator.
 ///
 /// # Errors
 /// [`DesignError::Eigen`] when the eigenproblem fails.
 pub fn clamped_resonator_mode(design: &Design, mesh: MeshOptions) -> Result<Option<ClampedMode>, DesignError> {
-    if design.resonator == crate::spec::ResonatorSpec::None {
+    if design.resonator == metaplate_core::design::CellResonator::None {
         return Ok(None);
     }
     let model = CellModel::new(design, mesh);
@@ -319,7 +283,7 @@ fn first_crossing_wavelength(branch: &Branch, freq_hz: f64) -> Option<f64> {
 
 /// The analytic A0 of the homogeneous plate folded into the first Brillouin zone: at each path point the lowest
 /// `modes` of `f = sqrt(D / rho h) |k + G|^2 / (2 pi)` over reciprocal lattice vectors G, Hz.
-pub fn folded_a0(plate: &PlateSpec, a_m: f64, path: &[PathPoint], modes: usize) -> Vec<Vec<f64>> {
+pub fn folded_a0(plate: &CellPlate, a_m: f64, path: &[PathPoint], modes: usize) -> Vec<Vec<f64>> {
     let g = 2.0 * PI / a_m;
     // |G| up to a few zones more than the modes need (each zone adds about 4 folded branches).
     let reach = (modes as f64).sqrt().ceil() as i64 + 2;

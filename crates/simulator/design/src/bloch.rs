@@ -158,6 +158,45 @@ impl Reduction {
         [k, m, m_res]
     }
 
+    /// The lowest `n_modes` modes at each wave vector `(kx, ky)`, rad/m, spread over `threads` workers (0: as many
+    /// as the machine has cores; each solve is independent).
+    ///
+    /// # Errors
+    /// As [`Reduction::solve`], the first failing wave vector's.
+    pub fn solve_many(
+        &self,
+        model: &CellModel,
+        wave_vectors: &[(f64, f64)],
+        n_modes: usize,
+        threads: usize,
+    ) -> Result<Vec<Vec<Mode>>, DesignError> {
+        let threads = match threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
+        }
+        .clamp(1, wave_vectors.len().max(1));
+        let chunk = wave_vectors.len().div_ceil(threads).max(1);
+        let results: Vec<Result<Vec<Vec<Mode>>, DesignError>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = wave_vectors
+                .chunks(chunk)
+                .map(|ks| scope.spawn(move || ks.iter().map(|&(kx, ky)| self.solve(model, kx, ky, n_modes)).collect()))
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| {
+                    h.join().unwrap_or_else(|_| {
+                        Err(DesignError::Eigen { at: "worker thread".into(), why: "panicked".into() })
+                    })
+                })
+                .collect()
+        });
+        let mut all = Vec::with_capacity(wave_vectors.len());
+        for r in results {
+            all.extend(r?);
+        }
+        Ok(all)
+    }
+
     /// The lowest `n_modes` modes at wave vector (kx, ky), rad/m (ignored when clamped: pass zeros).
     ///
     /// # Errors

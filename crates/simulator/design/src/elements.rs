@@ -9,14 +9,14 @@
 //! shear parameter in the stiffness (exact for end loads) and the consistent mass with the sections' rotary
 //! inertia (Rayleigh).
 
-use crate::spec::PlateSpec;
+use metaplate_core::design::CellPlate;
 
 /// Degrees of freedom of a plate element.
 pub const PLATE_DOFS: usize = 27;
 
 /// Stiffness and mass of one 9-node Mindlin element, row-major `PLATE_DOFS x PLATE_DOFS`, DOF `3 n + c` for node
 /// `n` (tensor order) and component `c` in (w, bx, by).
-pub fn mindlin_q9(plate: &PlateSpec, xy: &[[f64; 2]; 9]) -> (Vec<f64>, Vec<f64>) {
+pub fn mindlin_q9(plate: &CellPlate, xy: &[[f64; 2]; 9]) -> (Vec<f64>, Vec<f64>) {
     const G: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
     const W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
     let d = plate.flexural_rigidity_n_m();

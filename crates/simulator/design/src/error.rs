@@ -1,22 +1,13 @@
 //! The crate's error.
 
-use metaplate_core::toml_locate::Located;
+use metaplate_core::toml_locate::TomlFileError;
 
 /// What can go wrong reading a design or computing its band structure.
 #[derive(Debug, thiserror::Error)]
 pub enum DesignError {
-    /// A design file could not be read.
-    #[error("cannot read design file {path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// Why.
-        #[source]
-        source: std::io::Error,
-    },
-    /// A design file is not valid: where (file:line:column), which key, why.
-    #[error("{0}")]
-    Invalid(Located),
+    /// A design or search file could not be read or is not valid (file, line, key).
+    #[error(transparent)]
+    File(#[from] TomlFileError),
     /// An option out of its range (mesh sizes, number of wave vectors or modes).
     #[error("invalid option: {0}")]
     Option(String),

@@ -16,14 +16,21 @@ use faer::Mat;
 use faer::linalg::solvers::SolveLstsq;
 use serde::Serialize;
 
+use metaplate_core::design::{CellResonator, Design};
+
+use crate::bloch::{Reduction, Sides};
 use crate::error::DesignError;
-use crate::spec::{Design, ResonatorSpec};
+use crate::mesh::MeshOptions;
+use crate::model::CellModel;
 
 /// The fitted points' largest `|k| a`: wavelengths of at least 4 lattice constants.
 pub const HOMOGENISED_MAX_KA: f64 = PI / 2.0;
 
 /// Fewest branch points a fit takes (three parameters, and one more to show a residual).
 const MIN_POINTS: usize = 4;
+
+/// Wave vectors per direction (Gamma-X, Gamma-M) that [`homogenised_rocking_rod`] solves.
+const POINTS_PER_DIRECTION: usize = 8;
 
 /// Levenberg-Marquardt steps at most; the fit converges in a few tens from the starting point below.
 const MAX_STEPS: usize = 200;
@@ -117,7 +124,7 @@ impl Params {
 /// [`DesignError::Option`] when the design has no rod, or fewer than 4 usable points are given (compute the band
 /// with more wave vectors); [`DesignError::Fit`] when the fit does not give finite, positive parameters.
 pub fn fit_rocking_rod(design: &Design, first_branch: &[(f64, f64)]) -> Result<RockingRodFit, DesignError> {
-    let ResonatorSpec::Rod(rod) = &design.resonator else {
+    let CellResonator::Rod(rod) = &design.resonator else {
         return Err(DesignError::Option("the homogenised rocking rod needs a rod resonator".into()));
     };
     let a = design.lattice_constant_m;
@@ -200,6 +207,40 @@ pub fn fit_rocking_rod(design: &Design, first_branch: &[(f64, f64)]) -> Result<R
         max_relative_error: r.iter().fold(0.0, |m, e| m.max(e.abs())),
         rms_relative_error: (cost(&r) / r.len() as f64).sqrt(),
     })
+}
+
+/// Computes the first branch of `design`'s cell where the continuum holds (8 wave vectors along Gamma-X and 8 along
+/// Gamma-M, `|k| a` from pi/16 to pi/2, the default mesh) and fits the homogenised rocking rod to it: what a plate
+/// model built from a design uses, without the whole band diagram.
+///
+/// # Errors
+/// As [`fit_rocking_rod`], and [`DesignError::Eigen`] when an eigenproblem fails.
+pub fn homogenised_rocking_rod(design: &Design) -> Result<RockingRodFit, DesignError> {
+    if !matches!(design.resonator, CellResonator::Rod(_)) {
+        return Err(DesignError::Option("the homogenised rocking rod needs a rod resonator".into()));
+    }
+    let model = CellModel::new(design, MeshOptions::default());
+    let reduction = Reduction::new(&model, Sides::Periodic)?;
+    let k_max = HOMOGENISED_MAX_KA / design.lattice_constant_m;
+    let (c, d) = (1.0, std::f64::consts::FRAC_1_SQRT_2);
+    let wave_vectors: Vec<(f64, f64)> = [(c, 0.0), (d, d)]
+        .iter()
+        .flat_map(|&(cx, cy)| {
+            (1..=POINTS_PER_DIRECTION).map(move |i| {
+                let k = k_max * i as f64 / POINTS_PER_DIRECTION as f64;
+                (k * cx, k * cy)
+            })
+        })
+        .collect();
+    let modes = reduction.solve_many(&model, &wave_vectors, 1, 0)?;
+    let mut points = Vec::with_capacity(wave_vectors.len());
+    for (&(kx, ky), at) in wave_vectors.iter().zip(&modes) {
+        let mode = at
+            .first()
+            .ok_or_else(|| DesignError::Eigen { at: format!("k = ({kx:.3}, {ky:.3}) rad/m"), why: "no mode".into() })?;
+        points.push((kx.hypot(ky), mode.freq_hz));
+    }
+    fit_rocking_rod(design, &points)
 }
 
 /// Central-difference Jacobian of `residuals` at `p` (log-parameters: a step of 1e-6 is a relative 1e-6).

@@ -24,7 +24,6 @@ mod model;
 mod parquet;
 mod report;
 pub mod search;
-mod spec;
 
 pub use band::{
     BandDiagram, BandOptions, Branch, BranchPoint, ClampedMode, PAPER_WAVELENGTH_FREQS_HZ, PathPoint, SlowBranch,
@@ -32,8 +31,7 @@ pub use band::{
 };
 pub use bloch::{Mode, Reduction, Sides};
 pub use error::DesignError;
-pub use homogenise::{HOMOGENISED_MAX_KA, RockingRodFit, fit_rocking_rod};
+pub use homogenise::{HOMOGENISED_MAX_KA, RockingRodFit, fit_rocking_rod, homogenised_rocking_rod};
 pub use mesh::{Mesh, MeshOptions};
 pub use model::CellModel;
 pub use parquet::write_parquet;
-pub use spec::{BUILTIN_DESIGNS, Design, PAPER_PLATE, PlateSpec, ResonatorSpec, RodSide, RodSpec, SpringMassSpec};

@@ -10,7 +10,7 @@
 
 use crate::elements::{BeamSection, PLATE_DOFS, beam, mindlin_q9};
 use crate::mesh::{Mesh, MeshOptions};
-use crate::spec::{Design, ResonatorSpec, RodSide};
+use metaplate_core::design::{CellResonator, Design, RodSide};
 
 /// Which part of the cell an element belongs to (for the kinetic-energy shares).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -91,15 +91,15 @@ impl CellModel {
         });
         let mut n_full = master + 3;
         match &design.resonator {
-            ResonatorSpec::None => {}
-            ResonatorSpec::SpringMass(s) => {
+            CellResonator::None => {}
+            CellResonator::SpringMass(s) => {
                 let u = n_full;
                 n_full += 1;
                 let ks = s.stiffness_n_per_m;
                 blocks.push(Block { dofs: vec![w0, u], k: vec![ks, -ks, -ks, ks], m: vec![0.0; 4], part: Part::Plate });
                 blocks.push(Block { dofs: vec![u], k: vec![0.0], m: vec![s.mass_kg], part: Part::Resonator });
             }
-            ResonatorSpec::Rod(rod) => {
+            CellResonator::Rod(rod) => {
                 let section =
                     BeamSection::circular(rod.diameter_m, rod.youngs_modulus_pa, rod.poisson_ratio, rod.density_kg_m3);
                 let z0 = match rod.side {

@@ -1,6 +1,7 @@
 //! The homogeneous cell against the analytic A0 (the paper's formula, Materials and Methods).
 
-use metaplate_design::{CellModel, Design, MeshOptions, Reduction, Sides};
+use metaplate_core::design::Design;
+use metaplate_design::{CellModel, MeshOptions, Reduction, Sides};
 
 /// Up to 1 kHz, along Gamma-X and Gamma-M, the lowest Bloch mode of the cell without resonator is the A0 wave:
 /// within 1 % (the figure). What separates them: Mindlin's shear and rotary inertia (0.4 % at 1 kHz on

@@ -3,8 +3,9 @@
 
 use std::f64::consts::PI;
 
+use metaplate_core::design::Design;
 use metaplate_design::{
-    BandOptions, Design, DesignError, HOMOGENISED_MAX_KA, PAPER_WAVELENGTH_FREQS_HZ, RockingRodFit, band_diagram,
+    BandOptions, DesignError, HOMOGENISED_MAX_KA, PAPER_WAVELENGTH_FREQS_HZ, RockingRodFit, band_diagram,
     fit_rocking_rod,
 };
 
@@ -85,7 +86,7 @@ fn the_paper_cell_is_followed_by_its_homogenised_plate() {
     assert!(fit.points >= 8, "{} points", fit.points);
     assert!(fit.max_relative_error < 0.03, "max error {}", fit.max_relative_error);
     assert!((1.0..2.0).contains(&fit.rigidity_factor), "stiffness factor {}", fit.rigidity_factor);
-    let metaplate_design::ResonatorSpec::Rod(rod) = design.resonator else { unreachable!() };
+    let metaplate_core::design::CellResonator::Rod(rod) = design.resonator else { unreachable!() };
     let rigid = rod.free_mass_kg() * rod.free_length_m().powi(2) / 3.0;
     let ratio = fit.rotary_inertia_kg_m2 / rigid;
     assert!((0.5..2.0).contains(&ratio), "inertia {ratio} x a rigid rod's");
@@ -115,4 +116,20 @@ fn what_cannot_be_fitted_is_refused() {
     // A 2-point path has no points near Gamma: the diagram leaves the fit out.
     let band = band_diagram(&paper, &BandOptions { wave_vectors: 2, modes: 1, ..BandOptions::default() }, &[]).unwrap();
     assert!(band.homogenised.is_none());
+}
+
+/// The plate model's own fit (16 wave vectors, no band diagram) agrees with the band diagram's within its error.
+#[test]
+fn the_plate_models_fit_agrees_with_the_band_diagrams() {
+    let design = Design::paper();
+    let options = BandOptions { wave_vectors: 46, modes: 1, ..BandOptions::default() };
+    let from_band = band_diagram(&design, &options, &[]).unwrap().homogenised.unwrap();
+    let own = metaplate_design::homogenised_rocking_rod(&design).unwrap();
+    assert_eq!(own.points, 16);
+    assert!(own.max_relative_error < 0.03, "max error {}", own.max_relative_error);
+    for f in [75.0, 200.0, 300.0] {
+        let (a, b) = (own.wavenumber_rad_m(&design, f).unwrap(), from_band.wavenumber_rad_m(&design, f).unwrap());
+        assert!((a / b - 1.0).abs() < 0.02, "{f} Hz: {a} against {b} rad/m");
+    }
+    assert!(metaplate_design::homogenised_rocking_rod(&design.homogeneous()).is_err());
 }

@@ -29,7 +29,7 @@ fn the_grid_enumerates_every_combination_once_and_shards_split_it() {
     // Unvaried parameters keep the base's values; the design carries the varied ones.
     assert_eq!(all[0].lattice_constant_m, 0.008);
     let d = s.design(&all[11]);
-    let metaplate_design::ResonatorSpec::Rod(rod) = d.resonator else { panic!("a rod") };
+    let metaplate_core::design::CellResonator::Rod(rod) = d.resonator else { panic!("a rod") };
     assert_eq!((rod.height_m, rod.diameter_m, rod.youngs_modulus_pa), (0.04, 0.003, 200e9));
     // Four shards: disjoint, and together the whole grid.
     let mut seen = vec![0; 12];

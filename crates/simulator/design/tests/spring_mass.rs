@@ -1,9 +1,8 @@
 //! The coupling validated: a thin plate with a lattice of spring-mass resonators against the plane-wave expansion
 //! (tests/pwe.rs), within 2 % (the figure).
 
-use metaplate_design::{
-    CellModel, Design, MeshOptions, PlateSpec, Reduction, ResonatorSpec, Sides, SpringMassSpec, gamma_x_m_path,
-};
+use metaplate_core::design::{CellPlate, CellResonator, Design, SpringMassSpec};
+use metaplate_design::{CellModel, MeshOptions, Reduction, Sides, gamma_x_m_path};
 
 use crate::pwe::PointResonatorPlate;
 
@@ -15,14 +14,14 @@ use crate::pwe::PointResonatorPlate;
 #[test]
 fn spring_mass_lattice_matches_plane_wave_expansion_within_2_percent() {
     let a = 0.02;
-    let plate = PlateSpec { thickness_m: a / 24.0, ..metaplate_design::PAPER_PLATE };
+    let plate = CellPlate { thickness_m: a / 24.0, ..metaplate_core::design::PAPER_PLATE };
     let mass_kg = 0.5 * plate.areal_density_kg_m2() * a * a;
     let stiffness_n_per_m = mass_kg * (2.0 * std::f64::consts::PI * 400.0_f64).powi(2);
     let design = Design {
         name: "spring-mass".into(),
         lattice_constant_m: a,
         plate,
-        resonator: ResonatorSpec::SpringMass(SpringMassSpec {
+        resonator: CellResonator::SpringMass(SpringMassSpec {
             mass_kg,
             stiffness_n_per_m,
             footprint_radius_m: a / 100.0,

@@ -24,18 +24,26 @@ fn second_difference(mesh: &Mesh, i: isize, j: isize, along_x: bool) -> Option<[
     Some([(mesh.node(i - di, j - dj)?, 1.0), (mesh.node(i, j)?, -2.0), (mesh.node(i + di, j + dj)?, 1.0)])
 }
 
-/// Bending stiffness values `K` (N/m) on `pattern` for bending stiffness `d_n_m` (N m) and Poisson ratio `nu`.
+/// Bending stiffness values `K` (N/m) on `pattern` for bending stiffness `d_n_m` (N m) times `factor_at(x_m, y_m)`
+/// (each node's terms at the node, each twist term at its cell's centre) and Poisson ratio `nu`.
 ///
-/// Valid range: `d_n_m > 0`, `-1 < nu < 0.5` (K is then positive semi-definite). Returns `None` only if a stencil
-/// falls outside the pattern, which the 13-point pattern rules out.
-pub(crate) fn stiffness(mesh: &Mesh, pattern: &Pattern, d_n_m: f64, nu: f64) -> Option<Vec<f64>> {
+/// Valid range: `d_n_m > 0`, factors `> 0`, `-1 < nu < 0.5` (K is then positive semi-definite). Returns `None` only
+/// if a stencil falls outside the pattern, which the 13-point pattern rules out.
+pub(crate) fn stiffness(
+    mesh: &Mesh,
+    pattern: &Pattern,
+    d_n_m: f64,
+    nu: f64,
+    factor_at: &dyn Fn(f64, f64) -> f64,
+) -> Option<Vec<f64>> {
     let h2 = mesh.spacing_m * mesh.spacing_m;
     // Each term is (stencil . w / h^2)^2 * area: with integer stencils the scale is D * area / h^4.
     let node_scale = d_n_m / h2;
     let mut values = vec![0.0; pattern.nnz()];
     for n in 0..mesh.len() {
         let (i, j) = (mesh.lattice_of[n].0 as isize, mesh.lattice_of[n].1 as isize);
-        let share = mesh.cells_around(n) as f64 / 4.0;
+        let (x, y) = mesh.position_m(n);
+        let share = factor_at(x, y) * mesh.cells_around(n) as f64 / 4.0;
         let sx = second_difference(mesh, i, j, true);
         let sy = second_difference(mesh, i, j, false);
         for s in [&sx, &sy].into_iter().flatten() {
@@ -63,7 +71,10 @@ pub(crate) fn stiffness(mesh: &Mesh, pattern: &Pattern, d_n_m: f64, nu: f64) -> 
             (mesh.node(i, j + 1)?, -1.0),
             (mesh.node(i + 1, j + 1)?, 1.0),
         ];
-        if !pattern.add_outer(&mut values, &corners, node_scale * 2.0 * (1.0 - nu)) {
+        let (x, y) = mesh.position_m(n);
+        let half = mesh.spacing_m / 2.0;
+        let factor = factor_at(x + half, y + half);
+        if !pattern.add_outer(&mut values, &corners, factor * node_scale * 2.0 * (1.0 - nu)) {
             return None;
         }
     }
@@ -101,7 +112,7 @@ mod tests {
     fn symmetric_with_rigid_body_null_space() {
         let mesh = square_mesh(6, 0.01);
         let pattern = Pattern::new(&mesh);
-        let k = stiffness(&mesh, &pattern, 1.0, 0.37).unwrap();
+        let k = stiffness(&mesh, &pattern, 1.0, 0.37, &|_, _| 1.0).unwrap();
         for c in 0..pattern.dim() {
             for p in pattern.col_ptr[c]..pattern.col_ptr[c + 1] {
                 let r = pattern.row_idx[p];
@@ -130,7 +141,7 @@ mod tests {
         let mesh = square_mesh(10, h);
         let pattern = Pattern::new(&mesh);
         let (d, nu) = (1.04, 0.37);
-        let k = stiffness(&mesh, &pattern, d, nu).unwrap();
+        let k = stiffness(&mesh, &pattern, d, nu, &|_, _| 1.0).unwrap();
         let (kx, ky) = (40.0, 25.0);
         let w: Vec<f64> = (0..mesh.len()).map(|n| mesh.position_m(n)).map(|(x, y)| (kx * x + ky * y).cos()).collect();
         let kw = apply(&pattern, &k, &w);
@@ -139,6 +150,24 @@ mod tests {
         let expected = d * h * h * lap * lap * w[centre];
         // Sums of 25 terms of size D/h^2 * |w| ~ 1e4: 1e-9 relative is rounding.
         assert!((kw[centre] - expected).abs() < 1e-9 * (d / (h * h)), "{} vs {expected}", kw[centre]);
+    }
+
+    #[test]
+    fn a_stiffened_half_scales_its_own_terms_only() {
+        // Factor 3 on x > 0.03 m: every node term and twist term there is 3 times the plain plate's, and K w at a
+        // node far from the boundary between the halves (its stencils wholly on one side) is 1 or 3 times.
+        let h = 0.01;
+        let mesh = square_mesh(6, h);
+        let pattern = Pattern::new(&mesh);
+        let plain = stiffness(&mesh, &pattern, 1.0, 0.3, &|_, _| 1.0).unwrap();
+        let stiff = stiffness(&mesh, &pattern, 1.0, 0.3, &|x, _| if x > 0.03 { 3.0 } else { 1.0 }).unwrap();
+        let w: Vec<f64> =
+            (0..mesh.len()).map(|n| mesh.position_m(n)).map(|(x, y)| (30.0 * x).sin() * (20.0 * y).cos()).collect();
+        let (kw_plain, kw_stiff) = (apply(&pattern, &plain, &w), apply(&pattern, &stiff, &w));
+        let node = |x: f64| mesh.interpolation(x, 0.03).unwrap()[0].0;
+        let (left, right) = (node(0.0), node(0.06));
+        assert!((kw_stiff[left] - kw_plain[left]).abs() < 1e-12 * kw_plain[left].abs().max(1.0));
+        assert!((kw_stiff[right] - 3.0 * kw_plain[right]).abs() < 1e-9 * kw_plain[right].abs().max(1.0));
     }
 
     #[test]

@@ -89,4 +89,4 @@ pub use error::PlateError;
 pub use greens::{ALIAS_DECAY_DB, GreensFunctions, GreensRequest, MAX_GREENS_BYTES, MAX_IR_SAMPLES, SpectralPlan};
 pub use mesh::MAX_LATTICE_POINTS;
 pub use model::{MAX_REFINEMENT, ModelOptions, PlateModel};
-pub use resonators::effective_parameters;
+pub use resonators::{RodParameters, design_fit, effective_parameters};

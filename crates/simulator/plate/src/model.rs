@@ -97,8 +97,11 @@ impl PlateModel {
             (scene.grid.origin_x_m, scene.grid.origin_y_m),
         )?;
         let pattern = Pattern::new(&mesh);
-        let stiffness = bending::stiffness(&mesh, &pattern, plate.bending_stiffness_n_m(), plate.poisson_ratio)
-            .ok_or_else(|| PlateError::invalid("mesh", "a bending stencil falls outside the sparsity pattern"))?;
+        let resonators = Resonators::new(scene, &mesh, &pattern)?;
+        let rigidity_at = |x, y| resonators.rigidity_factor_at(x, y);
+        let stiffness =
+            bending::stiffness(&mesh, &pattern, plate.bending_stiffness_n_m(), plate.poisson_ratio, &rigidity_at)
+                .ok_or_else(|| PlateError::invalid("mesh", "a bending stencil falls outside the sparsity pattern"))?;
         let diag = |n: usize| pattern.position(n, n).ok_or_else(|| PlateError::invalid("mesh", "missing diagonal"));
         let mass = bending::lumped_mass(&mesh, plate.mass_per_area_kg_m2())
             .into_iter()
@@ -137,7 +140,6 @@ impl PlateModel {
                 }
             }
         }
-        let resonators = Resonators::new(scene, &mesh, &pattern)?;
         let host_loss_factor = scene.supports.iter().map(|s| s.loss_factor).fold(plate.loss_factor, f64::min);
         let actuators = scene
             .actuators

@@ -17,9 +17,17 @@
 //! cantilever's scaling).
 //! Defaults when the scene gives no override: `mu` from the rod and plate densities, `f_r` the first mode of the rod
 //! clamped at its base, `(1.875^2 / 2 pi) (d / 4) sqrt(E / rho) / L^2` (an upper bound: the real plate is compliant).
+//!
+//! A lattice that names a unit-cell design takes all of it from the cell instead: `metaplate-design`'s homogenised
+//! rocking rod, fitted to the cell's band structure (its mass, the rod's rotary inertia and joint resonance, and the
+//! footprints' stiffening of the plate, which [`Resonators::rigidity_factor_at`] gives the bending stiffness).
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
+use std::sync::Mutex;
+
+use metaplate_core::design::Design;
+use metaplate_design::RockingRodFit;
 
 use metaplate_core::scene::{ResonatorModel, ResonatorSpec, Scene};
 use num_complex::Complex64;
@@ -53,25 +61,98 @@ pub(crate) struct Resonators {
     static_mass: Vec<(usize, f64)>,
     /// Resonant rotary inertia (Laplacian-shaped): (value position, rod, coefficient in kg).
     resonant_inertia: Vec<(usize, usize, f64)>,
+    /// Lattice constant, m, and the cells of the lattice's sites (keys of [`site_key`]).
+    pitch_m: f64,
+    sites: std::collections::HashSet<(i64, i64)>,
+    /// Bending stiffness under the lattice over the bare plate's.
+    rigidity_factor: f64,
 }
 
-/// Rod parameters the model uses, after overrides and defaults: mass ratio and resonance, Hz.
-pub fn effective_parameters(scene: &Scene) -> Result<(f64, f64), PlateError> {
+/// The lattice cell (pitch `a_m`, a site at the origin) holding the point `(x_m, y_m)`.
+fn site_key(x_m: f64, y_m: f64, a_m: f64) -> (i64, i64) {
+    ((x_m / a_m).round() as i64, (y_m / a_m).round() as i64)
+}
+
+/// The rods as the plate model takes them, after a design's fit, overrides and defaults.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RodParameters {
+    /// Mass per cell that moves with the plate, over the plate's own `rho h a^2` (dimensionless).
+    pub mass_ratio: f64,
+    /// Resonance of a rod of the mean height, Hz.
+    pub resonance_hz: f64,
+    /// Rotary inertia of a rod of the mean height about its base, per cell, kg m^2 (`rocking_rod`).
+    pub rotary_inertia_kg_m2: f64,
+    /// Bending stiffness of the plate under the lattice over the bare plate's (1 unless a design's fit stiffens it).
+    pub rigidity_factor: f64,
+}
+
+/// The rods' parameters of `scene`'s lattice: from its design's homogenised fit when it names one, else from the
+/// rod and the scene's overrides.
+///
+/// # Errors
+/// [`PlateError::InvalidParameter`] when a parameter is not finite and positive, or the design's fit fails.
+pub fn effective_parameters(scene: &Scene) -> Result<RodParameters, PlateError> {
     let spec = &scene.resonators;
-    let mu = match spec.mass_ratio {
-        Some(mu) => mu,
-        None => spec
-            .cell_mass_ratio(scene.plate.mass_per_area_kg_m2())
-            .map_err(|e| PlateError::invalid("resonators.mass_ratio", e.to_string()))?,
+    let rho_h = scene.plate.mass_per_area_kg_m2();
+    let parameters = match &spec.design {
+        Some(design) => {
+            let fit = design_fit(design)?;
+            RodParameters {
+                mass_ratio: fit.added_mass_ratio,
+                resonance_hz: fit.resonance_hz,
+                rotary_inertia_kg_m2: fit.rotary_inertia_kg_m2,
+                rigidity_factor: fit.rigidity_factor,
+            }
+        }
+        None => {
+            let mass_ratio = match spec.mass_ratio {
+                Some(mu) => mu,
+                None => spec
+                    .cell_mass_ratio(rho_h)
+                    .map_err(|e| PlateError::invalid("resonators.mass_ratio", e.to_string()))?,
+            };
+            RodParameters {
+                mass_ratio,
+                resonance_hz: spec.resonance_hz.unwrap_or_else(|| clamped_rod_resonance_hz(spec)),
+                rotary_inertia_kg_m2: mass_ratio * rho_h * spec.pitch_m.powi(2) * spec.gyration_radius_m().powi(2),
+                rigidity_factor: 1.0,
+            }
+        }
     };
-    let f_r = spec.resonance_hz.unwrap_or_else(|| clamped_rod_resonance_hz(spec));
-    if !(mu.is_finite() && mu > 0.0 && f_r.is_finite() && f_r > 0.0) {
+    let RodParameters { mass_ratio, resonance_hz, rotary_inertia_kg_m2, rigidity_factor } = parameters;
+    if ![mass_ratio, resonance_hz, rotary_inertia_kg_m2, rigidity_factor].iter().all(|v| v.is_finite() && *v > 0.0) {
         return Err(PlateError::invalid(
             "resonators",
-            format!("mass ratio {mu} and resonance {f_r} Hz must be finite and positive"),
+            format!(
+                "mass ratio {mass_ratio}, resonance {resonance_hz} Hz, rotary inertia {rotary_inertia_kg_m2} kg m^2 \
+                 and stiffness factor {rigidity_factor} must be finite and positive"
+            ),
         ));
     }
-    Ok((mu, f_r))
+    Ok(parameters)
+}
+
+/// Fits already made in this process: a plate model is built many times from one scene (the lab, its truth, the
+/// error budget's variants), and a fit solves 16 eigenproblems.
+static FITS: Mutex<Vec<(Design, RockingRodFit)>> = Mutex::new(Vec::new());
+
+/// The homogenised rocking rod the plate model takes from `design` (computed once per design in a process).
+///
+/// # Errors
+/// [`PlateError::InvalidParameter`] at `resonators.design` when the design has no rod or its fit fails.
+pub fn design_fit(design: &Design) -> Result<RockingRodFit, PlateError> {
+    // A poisoned memo only means another thread panicked mid-push: recompute rather than trust or fail.
+    if let Ok(fits) = FITS.lock()
+        && let Some((_, fit)) = fits.iter().find(|(d, _)| d == design)
+    {
+        return Ok(*fit);
+    }
+    let fit = metaplate_design::homogenised_rocking_rod(design)
+        .map_err(|e| PlateError::invalid("resonators.design", format!("design `{}`: {e}", design.name)))?;
+    if let Ok(mut fits) = FITS.lock() {
+        fits.push((design.clone(), fit));
+    }
+    Ok(fit)
 }
 
 /// First bending mode of a rod clamped at its base and free at its tip, Hz.
@@ -93,16 +174,17 @@ impl Resonators {
         if spec.model == ResonatorModel::None {
             return Ok(Self::default());
         }
-        let (mu, f_r) = effective_parameters(scene)?;
+        let rods = effective_parameters(scene)?;
+        let (mu, f_r) = (rods.mass_ratio, rods.resonance_hz);
         let sites = spec
             .lattice_sites_m(&scene.plate.outline)
             .map_err(|e| PlateError::invalid("resonators.pitch_m", e.to_string()))?;
         let a = spec.pitch_m;
-        let site_key = |x: f64, y: f64| ((x / a).round() as i64, (y / a).round() as i64);
+        let site_key = |x: f64, y: f64| site_key(x, y, a);
         let mut rng = SplitMix64::new(scene.seed, HEIGHT_STREAM);
         let heights: Vec<f64> =
             sites.iter().map(|_| 1.0 + spec.height_spread * rng.normal().clamp(-MAX_SIGMAS, MAX_SIGMAS)).collect();
-        let rods = heights
+        let rod_list = heights
             .iter()
             .map(|s| Rod { omega_r_sq: (2.0 * PI * f_r / (s * s)).powi(2), loss_factor: spec.loss_factor })
             .collect();
@@ -110,7 +192,13 @@ impl Resonators {
             sites.iter().enumerate().map(|(k, &(x, y))| (site_key(x, y), k)).collect();
         let mass_per_area = mu * scene.plate.mass_per_area_kg_m2();
         let h2 = mesh.spacing_m * mesh.spacing_m;
-        let mut out = Self { rods, ..Self::default() };
+        let mut out = Self {
+            rods: rod_list,
+            pitch_m: a,
+            sites: rod_at.keys().copied().collect(),
+            rigidity_factor: rods.rigidity_factor,
+            ..Self::default()
+        };
         for n in 0..mesh.len() {
             let (x, y) = mesh.position_m(n);
             let Some(&rod) = rod_at.get(&site_key(x, y)) else { continue };
@@ -123,9 +211,14 @@ impl Resonators {
         }
         if spec.model == ResonatorModel::RockingRod {
             out.resonant_inertia = rotary_entries(mesh, pattern, &rod_at, &site_key, |rod| {
-                // J / a^2 per unit area, and 1/2 per cell edge (each gradient component is averaged over two edges).
+                // J / a^2 per unit area, and 1/2 per cell edge (each gradient component is averaged over two edges);
+                // a rod s times as tall has s times the mass at s times the radius of gyration. Rods given key by
+                // key keep the expression (and so the bits) of earlier versions.
                 let s = heights[rod];
-                0.5 * s * mass_per_area * (s * spec.gyration_radius_m()).powi(2)
+                match spec.design {
+                    None => 0.5 * s * mass_per_area * (s * spec.gyration_radius_m()).powi(2),
+                    Some(_) => 0.5 * s.powi(3) * rods.rotary_inertia_kg_m2 / (a * a),
+                }
             })?;
         }
         Ok(out)
@@ -151,6 +244,12 @@ impl Resonators {
         for &(pos, rod, c) in &self.resonant_inertia {
             values[pos] -= w2 * c * factor[rod];
         }
+    }
+
+    /// The bending stiffness at `(x_m, y_m)` over the bare plate's: the design's stiffening inside the lattice's
+    /// cells, 1 elsewhere (and everywhere without rods).
+    pub fn rigidity_factor_at(&self, x_m: f64, y_m: f64) -> f64 {
+        if self.sites.contains(&site_key(x_m, y_m, self.pitch_m)) { self.rigidity_factor } else { 1.0 }
     }
 
     /// Smallest loss factor among the rods (`None` without rods): it bounds how slowly the coupled system rings.

@@ -1,6 +1,7 @@
 //! A unit cell's band diagram as the paper's Fig. 2B-D draws it, for [`crate::band_structure`].
 
-use metaplate_design::{BandDiagram, BranchPoint, Design};
+use metaplate_core::design::Design;
+use metaplate_design::{BandDiagram, BranchPoint};
 
 use crate::plots::{BandFigure, Curve};
 

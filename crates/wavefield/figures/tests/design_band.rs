@@ -2,7 +2,8 @@
 //! frequency rises, one value per frequency, not the path's legs drawn over each other; m = 1 reaches the branch's
 //! top.
 
-use metaplate_design::{BandOptions, Design, band_diagram};
+use metaplate_core::design::Design;
+use metaplate_design::{BandOptions, band_diagram};
 use metaplate_figures::design_band;
 
 #[test]

@@ -3,6 +3,8 @@
 //! It differs from [`Scene`] in one place: a top-level `[voice_coil]` table gives every actuator's default, and an
 //! `[[actuators]]` entry's own `voice_coil` table overrides some or all of its fields.
 
+use std::path::Path;
+
 use serde::{Deserialize, Serialize};
 
 use super::Scene;
@@ -10,7 +12,7 @@ use super::actuator::{ActuatorSpec, VoiceCoilPatch, VoiceCoilSpec};
 use super::fault::FaultSpec;
 use super::instruments::{AudioSpec, DaqSpec, LdvSpec};
 use super::plate::PlateSpec;
-use super::resonator::ResonatorSpec;
+use super::resonator::ResonatorFile;
 use super::setup::SetupSpec;
 use super::support::SupportSpec;
 use super::validate::Problem;
@@ -26,8 +28,8 @@ pub(crate) struct SceneFile {
     plate: PlateSpec,
     #[serde(default)]
     supports: Vec<SupportSpec>,
-    #[serde(default = "ResonatorSpec::none")]
-    resonators: ResonatorSpec,
+    #[serde(default = "ResonatorFile::none")]
+    resonators: ResonatorFile,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     voice_coil: Option<VoiceCoilSpec>,
     actuators: Vec<ActuatorEntry>,
@@ -51,11 +53,13 @@ struct ActuatorEntry {
 }
 
 impl SceneFile {
-    /// The scene this file describes: each actuator's voice coil is its overrides on the default.
+    /// The scene this file describes: each actuator's voice coil is its overrides on the default; a design file the
+    /// resonators name is read relative to `base` (the scene file's folder; the working directory without one).
     ///
     /// # Errors
-    /// A [`Problem`] when an actuator's voice coil lacks a field that no top-level `[voice_coil]` gives.
-    pub(crate) fn resolve(self) -> Result<Scene, Problem> {
+    /// A [`Problem`] when an actuator's voice coil lacks a field that no top-level `[voice_coil]` gives, or the
+    /// resonator lattice is incomplete or its design unreadable.
+    pub(crate) fn resolve(self, base: Option<&Path>) -> Result<Scene, Problem> {
         let default = self.voice_coil.as_ref();
         let actuators = self
             .actuators
@@ -77,7 +81,7 @@ impl SceneFile {
             seed: self.seed,
             plate: self.plate,
             supports: self.supports,
-            resonators: self.resonators,
+            resonators: self.resonators.resolve(base).map_err(|(key_path, message)| Problem { key_path, message })?,
             actuators,
             grid: self.grid,
             ldv: self.ldv,
@@ -109,7 +113,7 @@ impl From<Scene> for SceneFile {
             seed: scene.seed,
             plate: scene.plate,
             supports: scene.supports,
-            resonators: scene.resonators,
+            resonators: ResonatorFile::from(&scene.resonators),
             voice_coil,
             actuators,
             grid: scene.grid,

@@ -19,6 +19,11 @@
 //! once per point; 0, the default, aims exactly). An optional key at its default is not written, so it changes no
 //! scene's identity.
 //!
+//! A resonator lattice may name a unit-cell design (`[resonators] design = "paper"`, a built-in, or a design file's
+//! path relative to the scene file; [`crate::design`]): the design gives the lattice constant and the rods, the
+//! scene's plate must be the design's, and the simulated plate takes the rods' dynamics from the cell. The scene's
+//! text as written back holds the design inline, so that a dataset's copy of it stands alone.
+//!
 //! The built-in scenes are the paper's two plates, `metamaterial` and `homogeneous` (files in `foundation/core/scenes/`).
 //! A user's file is checked key by key: an unknown key, a missing key, a value of the wrong type or outside its
 //! valid range is a [`SceneError`] naming the file, line and key path, never a panic.
@@ -142,6 +147,11 @@ impl Scene {
     /// [`SceneError::Syntax`] (not TOML), [`SceneError::Schema`] (unknown key, missing key, wrong type, unknown
     /// fault kind...) or [`SceneError::Invalid`] (a value outside its valid range), each with the line and key path.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        Self::from_toml_in(text, origin, None)
+    }
+
+    /// As [`Scene::from_toml_str`], with a design file the resonators name read relative to `base`.
+    fn from_toml_in(text: &str, origin: &str, base: Option<&Path>) -> Result<Scene, SceneError> {
         let doc = DocIndex::parse(text, origin)
             .map_err(|l| SceneError::Syntax { location: l.location, message: l.message })?;
         let file: SceneFile = toml::from_str(text).map_err(|e| {
@@ -153,7 +163,7 @@ impl Scene {
             key_path: p.key_path,
             message: p.message,
         };
-        let scene = file.resolve().map_err(at)?;
+        let scene = file.resolve(base).map_err(at)?;
         scene.check().map_err(at)?;
         Ok(scene)
     }
@@ -166,7 +176,7 @@ impl Scene {
         let origin = path.display().to_string();
         let text = std::fs::read_to_string(path)
             .map_err(|e| SceneError::Io { path: origin.clone(), reason: e.to_string() })?;
-        Self::from_toml_str(&text, &origin)
+        Self::from_toml_in(&text, &origin, path.parent())
     }
 
     /// A built-in scene when `name_or_path` is a built-in's name (a built-in wins over a file of the same name in
@@ -258,7 +268,7 @@ impl TryFrom<SceneFile> for Scene {
     type Error = SceneError;
 
     fn try_from(file: SceneFile) -> Result<Self, SceneError> {
-        let scene = file.resolve().map_err(|p| SceneError::Invalid {
+        let scene = file.resolve(None).map_err(|p| SceneError::Invalid {
             location: "scene".to_owned(),
             key_path: p.key_path,
             message: p.message,

@@ -1,11 +1,16 @@
-//! The resonator lattice: brass rods standing on the plate (the metamaterial), or none.
+//! The resonator lattice: brass rods standing on the plate (the metamaterial), or none. A lattice either names a
+//! unit-cell design (`design = "paper"` or a design file), which gives the lattice constant and the rods, or gives
+//! them key by key.
 
 use std::f64::consts::PI;
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use super::error::SceneError;
 use super::outline::Outline;
+use crate::design::{CellResonator, Design};
+use crate::toml_locate::TomlFileError;
 
 /// The most resonators a lattice may hold (the paper's plate has about 400).
 pub const MAX_RESONATORS: usize = 1_000_000;
@@ -28,9 +33,9 @@ pub enum ResonatorModel {
 /// valid range (checked by [`crate::scene::Scene::validate`]) is: finite `pitch_m`, `rod_height_m`,
 /// `rod_diameter_m`, `rod_youngs_modulus_pa`, `rod_density_kg_m3` all `> 0`; `rod_diameter_m < pitch_m`;
 /// `loss_factor >= 0`; `region_inset_m >= 0` and leaving some plate; `0 <= height_spread < 0.5`; overrides,
-/// when present, `> 0`, and `gyration_radius_m <= rod_height_m`; at most [`MAX_RESONATORS`] rods.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(try_from = "ResonatorFile")]
+/// when present, `> 0`, and `gyration_radius_m <= rod_height_m`; at most [`MAX_RESONATORS`] rods. With a `design`,
+/// the model is `rocking_rod`, the design's resonator a rod, its plate the scene's, and no override is given.
+#[derive(Debug, Clone, PartialEq)]
 pub struct ResonatorSpec {
     /// How the plate model treats the rods.
     pub model: ResonatorModel,
@@ -52,16 +57,17 @@ pub struct ResonatorSpec {
     pub height_spread: f64,
     /// Effective-model override: resonator mass / plate mass per unit cell. When absent, derived from the rod
     /// ([`ResonatorSpec::cell_mass_ratio`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub mass_ratio: Option<f64>,
     /// Effective-model override: resonance frequency of one resonator on the plate, Hz. When absent, derived from
     /// the rod by the plate model.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub resonance_hz: Option<f64>,
     /// Effective-model override (`rocking_rod` only): the rod's radius of gyration about its base, m, so that its
     /// rotary inertia is `m r^2`. When absent, a rigid rod pivoting at its base: `rod_height_m / sqrt(3)`.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub gyration_radius_m: Option<f64>,
+    /// The unit cell the lattice is built from: `pitch_m` and the rod's keys are its lattice constant and rod (whole
+    /// height), and the plate model takes the rods' dynamics from the cell's band structure (`metaplate-design`'s
+    /// homogenised fit) rather than from the rod alone.
+    pub design: Option<Design>,
 }
 
 impl ResonatorSpec {
@@ -80,6 +86,7 @@ impl ResonatorSpec {
             mass_ratio: None,
             resonance_hz: None,
             gyration_radius_m: None,
+            design: None,
         }
     }
 
@@ -87,6 +94,33 @@ impl ResonatorSpec {
     /// `rod_height_m / sqrt(3)`.
     pub fn gyration_radius_m(&self) -> f64 {
         self.gyration_radius_m.unwrap_or(self.rod_height_m / 3f64.sqrt())
+    }
+
+    /// This lattice's loss, inset and spread with the rods of `design`: `rocking_rod`, its lattice constant and rod,
+    /// no override.
+    ///
+    /// # Errors
+    /// [`SceneError::InvalidArgument`] when the design's resonator is not a rod.
+    pub fn with_design(&self, design: Design) -> Result<Self, SceneError> {
+        let CellResonator::Rod(rod) = design.resonator else {
+            return Err(SceneError::invalid_argument(
+                "design",
+                format!("design `{}` has no rod: a scene's lattice holds rods", design.name),
+            ));
+        };
+        Ok(Self {
+            model: ResonatorModel::RockingRod,
+            pitch_m: design.lattice_constant_m,
+            rod_height_m: rod.height_m,
+            rod_diameter_m: rod.diameter_m,
+            rod_youngs_modulus_pa: rod.youngs_modulus_pa,
+            rod_density_kg_m3: rod.density_kg_m3,
+            mass_ratio: None,
+            resonance_hz: None,
+            gyration_radius_m: None,
+            design: Some(design),
+            ..self.clone()
+        })
     }
 
     /// Mass of one rod of the mean height, `rho pi d^2 / 4 h`, kg.
@@ -136,48 +170,155 @@ impl ResonatorSpec {
     }
 }
 
-/// The TOML form: fields other than `model` may be omitted when `model = "none"`.
-#[derive(Deserialize)]
+/// The TOML form: fields other than `model` may be omitted when `model = "none"`, and the lattice's and rod's when
+/// a `design` gives them. Written back with the design inline, so that a scene's text stands alone.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ResonatorFile {
+pub(crate) struct ResonatorFile {
     model: ResonatorModel,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pitch_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     rod_height_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     rod_diameter_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     rod_youngs_modulus_pa: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     rod_density_kg_m3: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     loss_factor: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     region_inset_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     height_spread: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     mass_ratio: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     resonance_hz: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     gyration_radius_m: Option<f64>,
+    /// Last: a table, which TOML writes after the plain keys.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    design: Option<DesignEntry>,
 }
 
-impl TryFrom<ResonatorFile> for ResonatorSpec {
-    type Error = String;
+/// A design named (a built-in, or a file's path relative to the scene file) or written inline.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+enum DesignEntry {
+    Named(String),
+    Inline(Design),
+}
 
-    fn try_from(f: ResonatorFile) -> Result<Self, String> {
-        let needs_rods = f.model != ResonatorModel::None;
+impl ResonatorFile {
+    /// No resonators.
+    pub(crate) fn none() -> Self {
+        Self::from(&ResonatorSpec::none())
+    }
+
+    /// The lattice this describes; a design's file path is taken relative to `base` (the scene file's folder).
+    ///
+    /// # Errors
+    /// `(key path, why)`: a missing key, a key the design gives, a design that cannot be read or is not a rod's.
+    pub(crate) fn resolve(self, base: Option<&Path>) -> Result<ResonatorSpec, (String, String)> {
+        let at = |key: &str, message: String| (format!("resonators.{key}"), message);
+        let design = match self.design {
+            None => None,
+            Some(DesignEntry::Inline(design)) => Some(design),
+            Some(DesignEntry::Named(name)) => {
+                let resolved = match (Design::builtin(&name), base) {
+                    (Some(d), _) => Ok(d),
+                    (None, Some(base)) if Path::new(&name).is_relative() => Design::load(&base.join(&name)),
+                    (None, _) => Design::load(Path::new(&name)),
+                };
+                Some(resolved.map_err(|e| match e {
+                    TomlFileError::Io { .. } => at(
+                        "design",
+                        format!("{e} (nor is it a built-in design: {})", crate::design::BUILTIN_DESIGNS.join(", ")),
+                    ),
+                    TomlFileError::Invalid(_) => at("design", e.to_string()),
+                })?)
+            }
+        };
+        if let Some(design) = design {
+            if self.model != ResonatorModel::RockingRod {
+                return Err(at("model", "a design's rods rock with the plate: use model = \"rocking_rod\"".into()));
+            }
+            for (name, v) in [
+                ("pitch_m", self.pitch_m),
+                ("rod_height_m", self.rod_height_m),
+                ("rod_diameter_m", self.rod_diameter_m),
+                ("rod_youngs_modulus_pa", self.rod_youngs_modulus_pa),
+                ("rod_density_kg_m3", self.rod_density_kg_m3),
+            ] {
+                if v.is_some() {
+                    return Err(at(name, "is given by the design (leave it out, or drop `design`)".into()));
+                }
+            }
+            for (name, v) in [
+                ("mass_ratio", self.mass_ratio),
+                ("resonance_hz", self.resonance_hz),
+                ("gyration_radius_m", self.gyration_radius_m),
+            ] {
+                if v.is_some() {
+                    return Err(at(name, "is taken from the design's cell (leave it out, or drop `design`)".into()));
+                }
+            }
+            let missing = |name: &str| at(name, format!("missing key `{name}`"));
+            let lattice = ResonatorSpec {
+                model: self.model,
+                loss_factor: self.loss_factor.ok_or_else(|| missing("loss_factor"))?,
+                region_inset_m: self.region_inset_m.ok_or_else(|| missing("region_inset_m"))?,
+                height_spread: self.height_spread.unwrap_or(0.0),
+                ..ResonatorSpec::none()
+            };
+            return lattice.with_design(design).map_err(|e| at("design", e.to_string()));
+        }
+        let needs_rods = self.model != ResonatorModel::None;
         let field = |name: &str, v: Option<f64>| match v {
             Some(v) => Ok(v),
-            None if needs_rods => Err(format!("missing key `{name}` (needed unless model = \"none\")")),
+            None if needs_rods => Err(at(name, format!("missing key `{name}` (needed unless model = \"none\")"))),
             None => Ok(0.0),
         };
-        Ok(Self {
-            model: f.model,
-            pitch_m: field("pitch_m", f.pitch_m)?,
-            rod_height_m: field("rod_height_m", f.rod_height_m)?,
-            rod_diameter_m: field("rod_diameter_m", f.rod_diameter_m)?,
-            rod_youngs_modulus_pa: field("rod_youngs_modulus_pa", f.rod_youngs_modulus_pa)?,
-            rod_density_kg_m3: field("rod_density_kg_m3", f.rod_density_kg_m3)?,
-            loss_factor: field("loss_factor", f.loss_factor)?,
-            region_inset_m: field("region_inset_m", f.region_inset_m)?,
+        Ok(ResonatorSpec {
+            model: self.model,
+            pitch_m: field("pitch_m", self.pitch_m)?,
+            rod_height_m: field("rod_height_m", self.rod_height_m)?,
+            rod_diameter_m: field("rod_diameter_m", self.rod_diameter_m)?,
+            rod_youngs_modulus_pa: field("rod_youngs_modulus_pa", self.rod_youngs_modulus_pa)?,
+            rod_density_kg_m3: field("rod_density_kg_m3", self.rod_density_kg_m3)?,
+            loss_factor: field("loss_factor", self.loss_factor)?,
+            region_inset_m: field("region_inset_m", self.region_inset_m)?,
             // A perfect lattice is a sensible default; the spread is a refinement.
-            height_spread: f.height_spread.unwrap_or(0.0),
-            mass_ratio: f.mass_ratio,
-            resonance_hz: f.resonance_hz,
-            gyration_radius_m: f.gyration_radius_m,
+            height_spread: self.height_spread.unwrap_or(0.0),
+            mass_ratio: self.mass_ratio,
+            resonance_hz: self.resonance_hz,
+            gyration_radius_m: self.gyration_radius_m,
+            design: None,
         })
+    }
+}
+
+impl From<&ResonatorSpec> for ResonatorFile {
+    /// The file form: every key (zeros without rods, as the canonical form has always had them), or with a design,
+    /// the design inline and the keys it does not give.
+    fn from(r: &ResonatorSpec) -> Self {
+        let own = |v: f64| r.design.is_none().then_some(v);
+        Self {
+            model: r.model,
+            pitch_m: own(r.pitch_m),
+            rod_height_m: own(r.rod_height_m),
+            rod_diameter_m: own(r.rod_diameter_m),
+            rod_youngs_modulus_pa: own(r.rod_youngs_modulus_pa),
+            rod_density_kg_m3: own(r.rod_density_kg_m3),
+            loss_factor: Some(r.loss_factor),
+            region_inset_m: Some(r.region_inset_m),
+            height_spread: Some(r.height_spread),
+            mass_ratio: r.mass_ratio,
+            resonance_hz: r.resonance_hz,
+            gyration_radius_m: r.gyration_radius_m,
+            design: r.design.clone().map(DesignEntry::Inline),
+        }
     }
 }

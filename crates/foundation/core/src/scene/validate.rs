@@ -152,6 +152,23 @@ impl Scene {
         if r.model == ResonatorModel::None {
             return Ok(());
         }
+        if let Some(design) = &r.design {
+            let (cell, plate) = (&design.plate, &self.plate);
+            // The cell's band structure is the scene's plate's only if the plate is the cell's, bit for bit.
+            for (key, scene_value, design_value) in [
+                ("thickness_m", plate.thickness_m, cell.thickness_m),
+                ("youngs_modulus_pa", plate.youngs_modulus_pa, cell.youngs_modulus_pa),
+                ("poisson_ratio", plate.poisson_ratio, cell.poisson_ratio),
+                ("density_kg_m3", plate.density_kg_m3, cell.density_kg_m3),
+            ] {
+                if scene_value != design_value {
+                    return problem(
+                        format!("plate.{key}"),
+                        format!("is {scene_value}, but design `{}`'s plate has {design_value}", design.name),
+                    );
+                }
+            }
+        }
         positive("resonators.pitch_m", r.pitch_m, "m")?;
         positive("resonators.rod_height_m", r.rod_height_m, "m")?;
         positive("resonators.rod_diameter_m", r.rod_diameter_m, "m")?;

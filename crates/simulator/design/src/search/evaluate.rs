@@ -4,7 +4,7 @@ use serde::Serialize;
 
 use crate::band::band_diagram;
 use crate::search::spec::{Candidate, Goal, SearchSpec};
-use crate::spec::ResonatorSpec;
+use metaplate_core::design::CellResonator;
 
 /// What a search records of one design (one row of its results).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -47,7 +47,7 @@ impl DesignResult {
 pub fn evaluate(spec: &SearchSpec, candidate: &Candidate) -> DesignResult {
     let design = spec.design(candidate);
     let (added_mass_kg_m2, mass_ratio) = match &design.resonator {
-        ResonatorSpec::Rod(rod) => (rod.free_mass_kg() / design.lattice_constant_m.powi(2), design.mass_ratio()),
+        CellResonator::Rod(rod) => (rod.free_mass_kg() / design.lattice_constant_m.powi(2), design.mass_ratio()),
         _ => (0.0, 0.0),
     };
     let mut result = DesignResult {

@@ -20,13 +20,13 @@
 
 use std::path::Path;
 
-use metaplate_core::toml_locate::DocIndex;
+use metaplate_core::toml_locate::{DocIndex, TomlFileError};
 use serde::{Deserialize, Serialize};
 
 use crate::band::BandOptions;
 use crate::error::DesignError;
 use crate::mesh::MeshOptions;
-use crate::spec::{Design, PlateSpec, ResonatorSpec};
+use metaplate_core::design::{CellPlate, CellResonator, Design};
 
 /// The most designs one search may enumerate: a full grid of more is a mistake in the ranges (at a few seconds
 /// each it would take weeks), refused before anything runs.
@@ -213,22 +213,22 @@ impl SearchSpec {
     /// Reads and validates a search file; a relative `base` path is taken from the file's folder.
     ///
     /// # Errors
-    /// [`DesignError::Io`] when it cannot be read; [`DesignError::Invalid`] located by line and key.
+    /// [`DesignError::File`]: it cannot be read, or as [`SearchSpec::from_toml_str`].
     pub fn load(path: &Path) -> Result<Self, DesignError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| DesignError::Io { path: path.display().to_string(), source })?;
+        let text = TomlFileError::read(path)?;
         Self::from_toml_str(&text, &path.display().to_string(), path.parent())
     }
 
     /// Parses a search file's text; `origin` prefixes errors, `dir` resolves a relative `base` path.
     ///
     /// # Errors
-    /// [`DesignError::Invalid`] (not TOML, unknown or missing key, wrong type, value out of range, unknown material,
+    /// [`DesignError::File`] (not TOML, unknown or missing key, wrong type, value out of range, unknown material,
     /// too many designs), located by line and key; the base design's own errors.
     pub fn from_toml_str(text: &str, origin: &str, dir: Option<&Path>) -> Result<Self, DesignError> {
-        let doc = DocIndex::parse(text, origin).map_err(DesignError::Invalid)?;
-        let file: SearchFile = toml::from_str(text).map_err(|e| DesignError::Invalid(doc.schema_error(&e)))?;
-        let invalid = |key: &str, why: String| DesignError::Invalid(doc.invalid(key.to_owned(), why));
+        let invalid_file = |l| DesignError::File(TomlFileError::Invalid(l));
+        let doc = DocIndex::parse(text, origin).map_err(invalid_file)?;
+        let file: SearchFile = toml::from_str(text).map_err(|e| invalid_file(doc.schema_error(&e)))?;
+        let invalid = |key: &str, why: String| invalid_file(doc.invalid(key.to_owned(), why));
         let base = match Design::builtin(&file.base) {
             Some(d) => d,
             None => {
@@ -237,7 +237,7 @@ impl SearchSpec {
                 Design::load(&p)?
             }
         };
-        let ResonatorSpec::Rod(rod) = base.resonator else {
+        let CellResonator::Rod(rod) = base.resonator else {
             return Err(invalid("base", "a search varies a rod resonator: the base design must have one".into()));
         };
         let values = |key: &str, v: Option<Values>, base: f64| -> Result<Vec<f64>, DesignError> {
@@ -301,7 +301,7 @@ impl SearchSpec {
             },
             threads: 0,
         };
-        let of = |p: &PlateSpec| Material {
+        let of = |p: &CellPlate| Material {
             name: "base",
             youngs_modulus_pa: p.youngs_modulus_pa,
             poisson_ratio: p.poisson_ratio,
@@ -387,7 +387,7 @@ impl SearchSpec {
             design.plate.poisson_ratio = m.poisson_ratio;
             design.plate.density_kg_m3 = m.density_kg_m3;
         }
-        if let ResonatorSpec::Rod(rod) = &mut design.resonator {
+        if let CellResonator::Rod(rod) = &mut design.resonator {
             rod.height_m = candidate.rod_height_m;
             rod.diameter_m = candidate.rod_diameter_m;
             rod.embedded_m = rod.embedded_m.min(candidate.plate_thickness_m);

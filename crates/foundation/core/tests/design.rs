@@ -1,6 +1,7 @@
 //! Design files: the paper's cell as TOML equals the built-in; mistakes are reported with file, line and key.
 
-use metaplate_design::{Design, DesignError};
+use metaplate_core::design::Design;
+use metaplate_core::toml_locate::TomlFileError;
 
 const PAPER_TOML: &str = r#"name = "paper"
 lattice_constant_m = 0.008
@@ -24,7 +25,7 @@ side = "top"
 
 fn invalid(text: &str) -> String {
     match Design::from_toml_str(text, "cell.toml") {
-        Err(DesignError::Invalid(located)) => located.to_string(),
+        Err(TomlFileError::Invalid(located)) => located.to_string(),
         other => panic!("expected an invalid design, got {other:?}"),
     }
 }
@@ -62,6 +63,6 @@ fn keys_of_another_kind_and_missing_keys_are_refused() {
 #[test]
 fn missing_file_is_an_io_error() {
     let error = Design::resolve("/nonexistent/cell.toml").unwrap_err();
-    assert!(matches!(error, DesignError::Io { .. }), "{error}");
+    assert!(matches!(error, TomlFileError::Io { .. }), "{error}");
     assert!(error.to_string().contains("/nonexistent/cell.toml"));
 }

@@ -1,12 +1,12 @@
-//! A unit cell's design: the plate, the resonator and the lattice; read from a TOML design file (validated with
-//! file, line and key, as scene files are) or built in (`paper`).
+//! A metamaterial unit cell's design: the plate, the resonator and the lattice; read from a TOML design file
+//! (validated with file, line and key, as scene files are) or built in (`paper`). `metaplate-design` computes its
+//! band structure; a scene's resonator lattice may name one.
 
 use std::path::Path;
 
-use metaplate_core::toml_locate::DocIndex;
 use serde::{Deserialize, Serialize};
 
-use crate::error::DesignError;
+use crate::toml_locate::{DocIndex, TomlFileError};
 
 /// An isotropic plate of uniform thickness (Mindlin theory: bending, transverse shear, rotary inertia).
 ///
@@ -14,7 +14,7 @@ use crate::error::DesignError;
 /// `10 <= density_kg_m3 <= 1e5`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct PlateSpec {
+pub struct CellPlate {
     /// Thickness h, m.
     pub thickness_m: f64,
     /// Young's modulus E, Pa.
@@ -25,7 +25,7 @@ pub struct PlateSpec {
     pub density_kg_m3: f64,
 }
 
-impl PlateSpec {
+impl CellPlate {
     /// Flexural rigidity D = E h^3 / (12 (1 - nu^2)), N m.
     pub fn flexural_rigidity_n_m(&self) -> f64 {
         self.youngs_modulus_pa * self.thickness_m.powi(3) / (12.0 * (1.0 - self.poisson_ratio.powi(2)))
@@ -43,7 +43,7 @@ impl PlateSpec {
             / (2.0 * std::f64::consts::PI)
     }
 
-    /// The analytic A0 wavenumber at `freq_hz`, rad/m (the inverse of [`PlateSpec::a0_freq_hz`]); its phase
+    /// The analytic A0 wavenumber at `freq_hz`, rad/m (the inverse of [`CellPlate::a0_freq_hz`]); its phase
     /// velocity is `2 pi f / k` and its wavelength `2 pi / k`.
     pub fn a0_wavenumber_rad_m(&self, freq_hz: f64) -> f64 {
         (2.0 * std::f64::consts::PI * freq_hz / (self.flexural_rigidity_n_m() / self.areal_density_kg_m2()).sqrt())
@@ -115,7 +115,7 @@ pub struct SpringMassSpec {
 /// The resonator in each cell.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
-pub enum ResonatorSpec {
+pub enum CellResonator {
     /// A homogeneous plate (the cell still has a tiny rigid footprint of plate material, 1/200 of the lattice
     /// constant in radius, so that every design shares one mesh topology).
     None,
@@ -126,24 +126,27 @@ pub enum ResonatorSpec {
 }
 
 /// A square unit cell: lattice constant, plate, resonator.
+///
+/// Serialises as a design file's tables; deserialising (a design inline in a scene) validates as a file does.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "DesignFile")]
 pub struct Design {
     /// Name (a built-in's, or the file's `name`, or empty).
     pub name: String,
     /// Lattice constant a (the cell's side), m.
     pub lattice_constant_m: f64,
     /// The host plate.
-    pub plate: PlateSpec,
+    pub plate: CellPlate,
     /// The resonator.
-    pub resonator: ResonatorSpec,
+    pub resonator: CellResonator,
 }
 
 /// Names of the built-in designs.
 pub const BUILTIN_DESIGNS: &[&str] = &["paper"];
 
 /// The paper's acrylic plate (Supplementary Methods, "Metamaterial Design: Numerical Experiments").
-pub const PAPER_PLATE: PlateSpec =
-    PlateSpec { thickness_m: 1.5e-3, youngs_modulus_pa: 3.2e9, poisson_ratio: 0.37, density_kg_m3: 1180.0 };
+pub const PAPER_PLATE: CellPlate =
+    CellPlate { thickness_m: 1.5e-3, youngs_modulus_pa: 3.2e9, poisson_ratio: 0.37, density_kg_m3: 1180.0 };
 
 impl Design {
     /// The paper's cell: 8 mm square of 1.5 mm acrylic with a brass rod of 33.4563 mm (1.5 mm of it press-fit in
@@ -153,7 +156,7 @@ impl Design {
             name: "paper".into(),
             lattice_constant_m: 8e-3,
             plate: PAPER_PLATE,
-            resonator: ResonatorSpec::Rod(RodSpec {
+            resonator: CellResonator::Rod(RodSpec {
                 height_m: 33.4563e-3,
                 diameter_m: 3.175e-3,
                 embedded_m: 1.5e-3,
@@ -167,15 +170,15 @@ impl Design {
 
     /// The same cell without its resonator.
     pub fn homogeneous(&self) -> Self {
-        Self { name: format!("{} (homogeneous)", self.name), resonator: ResonatorSpec::None, ..self.clone() }
+        Self { name: format!("{} (homogeneous)", self.name), resonator: CellResonator::None, ..self.clone() }
     }
 
     /// Radius of the rigid footprint, m.
     pub fn footprint_radius_m(&self) -> f64 {
         match &self.resonator {
-            ResonatorSpec::None => self.lattice_constant_m / 200.0,
-            ResonatorSpec::Rod(rod) => rod.diameter_m / 2.0,
-            ResonatorSpec::SpringMass(s) => s.footprint_radius_m,
+            CellResonator::None => self.lattice_constant_m / 200.0,
+            CellResonator::Rod(rod) => rod.diameter_m / 2.0,
+            CellResonator::SpringMass(s) => s.footprint_radius_m,
         }
     }
 
@@ -186,7 +189,7 @@ impl Design {
         let area = std::f64::consts::PI * r * r;
         let plate = &self.plate;
         match &self.resonator {
-            ResonatorSpec::Rod(rod) => {
+            CellResonator::Rod(rod) => {
                 area * (rod.density_kg_m3 * rod.embedded_m + plate.density_kg_m3 * (plate.thickness_m - rod.embedded_m))
             }
             _ => area * plate.areal_density_kg_m2(),
@@ -201,9 +204,9 @@ impl Design {
         let footprint_m2 = std::f64::consts::PI * r * r;
         let plate_kg = |footprint_kg: f64| (a * a - footprint_m2) * self.plate.areal_density_kg_m2() + footprint_kg;
         match &self.resonator {
-            ResonatorSpec::None => 0.0,
-            ResonatorSpec::SpringMass(s) => s.mass_kg / plate_kg(footprint_m2 * self.plate.areal_density_kg_m2()),
-            ResonatorSpec::Rod(rod) => rod.free_mass_kg() / plate_kg(self.footprint_mass_kg()),
+            CellResonator::None => 0.0,
+            CellResonator::SpringMass(s) => s.mass_kg / plate_kg(footprint_m2 * self.plate.areal_density_kg_m2()),
+            CellResonator::Rod(rod) => rod.free_mass_kg() / plate_kg(self.footprint_mass_kg()),
         }
     }
 
@@ -213,9 +216,9 @@ impl Design {
         let r = self.footprint_radius_m();
         let around = (a * a - std::f64::consts::PI * r * r) * self.plate.areal_density_kg_m2();
         let resonator = match &self.resonator {
-            ResonatorSpec::None => 0.0,
-            ResonatorSpec::Rod(rod) => rod.free_mass_kg(),
-            ResonatorSpec::SpringMass(s) => s.mass_kg,
+            CellResonator::None => 0.0,
+            CellResonator::Rod(rod) => rod.free_mass_kg(),
+            CellResonator::SpringMass(s) => s.mass_kg,
         };
         around + self.footprint_mass_kg() + resonator
     }
@@ -229,7 +232,7 @@ impl Design {
     ///
     /// # Errors
     /// As [`Design::load`].
-    pub fn resolve(name_or_path: &str) -> Result<Self, DesignError> {
+    pub fn resolve(name_or_path: &str) -> Result<Self, TomlFileError> {
         match Self::builtin(name_or_path) {
             Some(design) => Ok(design),
             None => Self::load(Path::new(name_or_path)),
@@ -239,22 +242,21 @@ impl Design {
     /// Reads and validates a design file.
     ///
     /// # Errors
-    /// [`DesignError::Io`] when it cannot be read; otherwise as [`Design::from_toml_str`].
-    pub fn load(path: &Path) -> Result<Self, DesignError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| DesignError::Io { path: path.display().to_string(), source })?;
+    /// [`TomlFileError::Io`] when it cannot be read; otherwise as [`Design::from_toml_str`].
+    pub fn load(path: &Path) -> Result<Self, TomlFileError> {
+        let text = TomlFileError::read(path)?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
     /// Parses and validates a design from TOML text; `origin` (a path) prefixes every error.
     ///
     /// # Errors
-    /// [`DesignError::Invalid`] (not TOML, unknown or missing key, wrong type, value out of range), located by line
+    /// [`TomlFileError::Invalid`] (not TOML, unknown or missing key, wrong type, value out of range), located by line
     /// and key path.
-    pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, DesignError> {
-        let doc = DocIndex::parse(text, origin).map_err(DesignError::Invalid)?;
-        let file: DesignFile = toml::from_str(text).map_err(|e| DesignError::Invalid(doc.schema_error(&e)))?;
-        file.into_design().map_err(|(key, why)| DesignError::Invalid(doc.invalid(key, why)))
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Self, TomlFileError> {
+        let doc = DocIndex::parse(text, origin).map_err(TomlFileError::Invalid)?;
+        let file: DesignFile = toml::from_str(text).map_err(|e| TomlFileError::Invalid(doc.schema_error(&e)))?;
+        file.into_design().map_err(|(key, why)| TomlFileError::Invalid(doc.invalid(key, why)))
     }
 
     /// Checks the ranges; the error is `(key path, reason)`.
@@ -272,8 +274,8 @@ impl Design {
             return Err(("plate.thickness_m".into(), "is larger than the lattice constant".into()));
         }
         match &self.resonator {
-            ResonatorSpec::None => {}
-            ResonatorSpec::Rod(rod) => {
+            CellResonator::None => {}
+            CellResonator::Rod(rod) => {
                 within("resonator.height_m", rod.height_m, 1e-4, 1.0)?;
                 within("resonator.diameter_m", rod.diameter_m, 1e-5, 0.8 * self.lattice_constant_m)?;
                 within("resonator.embedded_m", rod.embedded_m, 0.0, p.thickness_m)?;
@@ -284,7 +286,7 @@ impl Design {
                     return Err(("resonator.height_m".into(), "leaves (almost) no rod above the plate".into()));
                 }
             }
-            ResonatorSpec::SpringMass(s) => {
+            CellResonator::SpringMass(s) => {
                 within("resonator.mass_kg", s.mass_kg, 1e-9, 1e3)?;
                 within("resonator.stiffness_n_per_m", s.stiffness_n_per_m, 1e-3, 1e12)?;
                 within("resonator.footprint_radius_m", s.footprint_radius_m, 1e-6, 0.4 * self.lattice_constant_m)?;
@@ -310,7 +312,7 @@ struct DesignFile {
     #[serde(default)]
     name: String,
     lattice_constant_m: f64,
-    plate: PlateSpec,
+    plate: CellPlate,
     resonator: ResonatorFile,
 }
 
@@ -336,6 +338,14 @@ struct ResonatorFile {
     mass_kg: Option<f64>,
     stiffness_n_per_m: Option<f64>,
     footprint_radius_m: Option<f64>,
+}
+
+impl TryFrom<DesignFile> for Design {
+    type Error = String;
+
+    fn try_from(file: DesignFile) -> Result<Self, String> {
+        file.into_design().map_err(|(key, why)| format!("{key}: {why}"))
+    }
 }
 
 impl DesignFile {
@@ -366,11 +376,11 @@ impl DesignFile {
             ResonatorKind::None => {
                 stray(&rod_keys)?;
                 stray(&spring_keys)?;
-                ResonatorSpec::None
+                CellResonator::None
             }
             ResonatorKind::Rod => {
                 stray(&spring_keys)?;
-                ResonatorSpec::Rod(RodSpec {
+                CellResonator::Rod(RodSpec {
                     height_m: need("height_m", r.height_m)?,
                     diameter_m: need("diameter_m", r.diameter_m)?,
                     // A rod glued on the face rather than through the plate embeds nothing.
@@ -383,7 +393,7 @@ impl DesignFile {
             }
             ResonatorKind::SpringMass => {
                 stray(&rod_keys)?;
-                ResonatorSpec::SpringMass(SpringMassSpec {
+                CellResonator::SpringMass(SpringMassSpec {
                     mass_kg: need("mass_kg", r.mass_kg)?,
                     stiffness_n_per_m: need("stiffness_n_per_m", r.stiffness_n_per_m)?,
                     footprint_radius_m: need("footprint_radius_m", r.footprint_radius_m)?,
