@@ -168,7 +168,7 @@ fn devices_lists_every_backend_and_drafts_a_hardware_file_that_parses() {
         listing[section].as_array().unwrap().iter().map(|b| b["backend"].as_str().unwrap().to_owned()).collect()
     };
     assert_eq!(backends("ldv"), ["polytec", "analog"]);
-    assert_eq!(backends("daq"), ["labjack-u6", "nidaqmx"]);
+    assert_eq!(backends("daq"), ["labjack-u6", "nidaqmx", "alsa"]);
     assert_eq!(backends("audio"), ["alsa"]);
     assert_eq!(backends("keypad"), ["hidraw"]);
     for section in ["ldv", "daq", "audio", "keypad"] {

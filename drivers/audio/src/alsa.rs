@@ -87,6 +87,30 @@ pub fn encode(samples: &[f32], format: SampleFormat) -> Vec<u8> {
     bytes
 }
 
+/// Reads little-endian samples of `format` as full-scale values, the inverse of [`encode`]: integer codes over the
+/// largest positive code (so that the most negative code reads a little below -1), floats as they are.
+///
+/// Valid range: any bytes; a trailing partial sample is ignored. A float sample that is not finite (no converter
+/// writes one, but a device's bytes are not trusted) reads as 0.
+pub fn decode(bytes: &[u8], format: SampleFormat) -> Vec<f64> {
+    let width = format.bytes_per_sample();
+    bytes
+        .chunks_exact(width)
+        .map(|b| match format {
+            SampleFormat::F32 => {
+                let x = f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+                if x.is_finite() { x } else { 0.0 }
+            }
+            SampleFormat::S32 => f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])) / f64::from(i32::MAX),
+            // The low three bytes of the word, sign-extended from bit 23 (the top byte is padding).
+            SampleFormat::S24 | SampleFormat::S24Packed => {
+                f64::from(i32::from_le_bytes([0, b[0], b[1], b[2]]) >> 8) / f64::from((1 << 23) - 1)
+            }
+            SampleFormat::S16 => f64::from(i16::from_le_bytes([b[0], b[1]])) / f64::from(i16::MAX),
+        })
+        .collect()
+}
+
 /// `x` in [-1, 1] scaled to a signed integer of `magnitude_bits + 1` bits, rounded to nearest.
 fn to_int(x: f64, magnitude_bits: i32) -> i32 {
     let full_scale = ((1_i64 << magnitude_bits) - 1) as f64;
@@ -163,10 +187,10 @@ impl Drop for AlsaSink {
     }
 }
 
-/// A playback PCM of a sound card, as `metaplate devices` lists it.
+/// A playback or capture PCM of a sound card, as `metaplate devices` lists it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct PcmListing {
-    /// The name the hardware file's `audio.device` takes (`hw:CARD=24Ao,DEV=0`).
+    /// The name the hardware file's `audio.device` (playback) or `daq.device` (capture) takes (`hw:CARD=24Ao,DEV=0`).
     pub name: String,
     /// The card's long name.
     pub card: String,
@@ -185,6 +209,18 @@ pub struct PcmListing {
 /// # Errors
 /// [`PcmError::Other`] when the cards cannot be enumerated at all.
 pub fn playback_pcms() -> Result<Vec<PcmListing>, PcmError> {
+    pcms(Direction::Playback)
+}
+
+/// Every capture PCM of every sound card, as [`playback_pcms`] lists the playback ones.
+///
+/// # Errors
+/// As [`playback_pcms`].
+pub fn capture_pcms() -> Result<Vec<PcmListing>, PcmError> {
+    pcms(Direction::Capture)
+}
+
+fn pcms(direction: Direction) -> Result<Vec<PcmListing>, PcmError> {
     let mut found = Vec::new();
     for card in alsa::card::Iter::new() {
         let card = card.map_err(|e| PcmError::Other(format!("enumerating sound cards: {e}")))?;
@@ -195,8 +231,8 @@ pub fn playback_pcms() -> Result<Vec<PcmListing>, PcmError> {
         let card_name = card.get_longname().unwrap_or_default();
         for device in alsa::ctl::DeviceIter::new(&ctl) {
             let Ok(device_index) = u32::try_from(device) else { continue };
-            // Playback devices only: a capture-only device has no playback PCM info.
-            if ctl.pcm_info(device_index, 0, Direction::Playback).is_err() {
+            // Devices of this direction only: a capture-only device has no playback PCM info, and back.
+            if ctl.pcm_info(device_index, 0, direction).is_err() {
                 continue;
             }
             let name = format!("hw:CARD={id},DEV={device}");
@@ -207,7 +243,7 @@ pub fn playback_pcms() -> Result<Vec<PcmListing>, PcmError> {
                 rates_hz: None,
                 note: String::new(),
             };
-            match pcm_ranges(&name) {
+            match pcm_ranges(&name, direction) {
                 Ok((channels, rates)) => (listing.channels, listing.rates_hz) = (Some(channels), Some(rates)),
                 Err(e) => listing.note = map_error(&name, "asking its ranges", e).to_string(),
             }
@@ -217,10 +253,10 @@ pub fn playback_pcms() -> Result<Vec<PcmListing>, PcmError> {
     Ok(found)
 }
 
-/// The channel and rate ranges of the playback PCM `name`, opened non-blocking and closed again.
+/// The channel and rate ranges of the PCM `name` in `direction`, opened non-blocking and closed again.
 #[allow(clippy::type_complexity)] // Two (lowest, highest) pairs: channels and rates.
-fn pcm_ranges(name: &str) -> Result<((u32, u32), (u32, u32)), alsa::Error> {
-    let pcm = PCM::new(name, Direction::Playback, true)?;
+fn pcm_ranges(name: &str, direction: Direction) -> Result<((u32, u32), (u32, u32)), alsa::Error> {
+    let pcm = PCM::new(name, direction, true)?;
     let hw = HwParams::any(&pcm)?;
     Ok(((hw.get_channels_min()?, hw.get_channels_max()?), (hw.get_rate_min()?, hw.get_rate_max()?)))
 }
@@ -240,8 +276,65 @@ fn card_names(pcm_name: &str) -> (String, String) {
     }
 }
 
+/// An open PCM with what it really opened at: the sample format, rate and channels, period and buffer (frames).
+pub(crate) type Opened = (PCM, SampleFormat, PcmParams, u64, u64);
+
+/// Opens the PCM `name` in `direction` asking for `wanted`: the exact rate with ALSA's resampler off, interleaved
+/// access, the channel count (nearest), the first format of [`SampleFormat::PREFERENCE`] it offers, and the buffer
+/// and period times above; returns what it really opened (the caller compares it with what it asked).
+///
+/// # Errors
+/// [`PcmError::Params`] for a rate that is not a whole number of frames per second, no channel, or none of the
+/// formats; the mapped ALSA error of each step otherwise.
+pub(crate) fn open_pcm(name: &str, direction: Direction, wanted: PcmParams) -> Result<Opened, PcmError> {
+    let rate_hz = wanted.sample_rate_hz;
+    // ALSA rates are whole numbers of frames per second.
+    if !(rate_hz.is_finite() && rate_hz >= 1.0 && rate_hz <= f64::from(u32::MAX) && rate_hz.fract() == 0.0) {
+        return Err(PcmError::Params(format!("{name}: {rate_hz} Hz is not a whole rate ALSA can ask for")));
+    }
+    if wanted.channels == 0 {
+        return Err(PcmError::Params(format!("{name}: 0 channels")));
+    }
+    let c_name = CString::new(name).map_err(|_| PcmError::Params(format!("PCM name {name:?} contains a NUL byte")))?;
+    let err = |doing: &'static str| move |e| map_error(name, doing, e);
+    let doing_open = match direction {
+        Direction::Playback => "opening for playback",
+        Direction::Capture => "opening for capture",
+    };
+    let pcm = PCM::open(&c_name, direction, false).map_err(err(doing_open))?;
+    let format = {
+        let hw = HwParams::any(&pcm).map_err(err("reading its parameters"))?;
+        // Refuse ALSA's own resampling: the device runs at the rate we ask, or we see that it does not.
+        hw.set_rate_resample(false).map_err(err("turning resampling off"))?;
+        hw.set_access(Access::RWInterleaved).map_err(err("asking for interleaved access"))?;
+        // Nearest values, not exact ones: the device then opens at what it can, we read it back, and the
+        // driver refuses a mismatch with both numbers in its message.
+        hw.set_channels_near(wanted.channels).map_err(err("setting the channel count"))?;
+        hw.set_rate_near(rate_hz as u32, ValueOr::Nearest).map_err(err("setting the rate"))?;
+        let format =
+            SampleFormat::PREFERENCE.into_iter().find(|f| hw.test_format(f.alsa()).is_ok()).ok_or_else(|| {
+                PcmError::Params(format!("{name}: offers none of FLOAT_LE, S32_LE, S24_LE, S24_3LE, S16_LE"))
+            })?;
+        hw.set_format(format.alsa()).map_err(err("setting the sample format"))?;
+        hw.set_buffer_time_near(BUFFER_TIME_US, ValueOr::Nearest).map_err(err("setting the buffer time"))?;
+        hw.set_period_time_near(PERIOD_TIME_US, ValueOr::Nearest).map_err(err("setting the period time"))?;
+        pcm.hw_params(&hw).map_err(err("applying the parameters"))?;
+        format
+    };
+    let (opened, period_frames, buffer_frames) = {
+        let hw = pcm.hw_params_current().map_err(err("reading back its parameters"))?;
+        let rate = hw.get_rate().map_err(err("reading back the rate"))?;
+        let channels = hw.get_channels().map_err(err("reading back the channel count"))?;
+        let period = hw.get_period_size().map_err(err("reading back the period"))?;
+        let buffer = hw.get_buffer_size().map_err(err("reading back the buffer"))?;
+        (PcmParams { sample_rate_hz: f64::from(rate), channels }, period, buffer)
+    };
+    let frames = |v: alsa::pcm::Frames| u64::try_from(v).unwrap_or(1).max(1);
+    Ok((pcm, format, opened, frames(period_frames), frames(buffer_frames)))
+}
+
 /// Maps an ALSA error to a [`PcmError`], saying what was being done.
-fn map_error(pcm_name: &str, doing: &str, error: alsa::Error) -> PcmError {
+pub(crate) fn map_error(pcm_name: &str, doing: &str, error: alsa::Error) -> PcmError {
     let detail = format!("{pcm_name}: {doing}: {error}");
     match error.errno() {
         // Unplugged USB interfaces answer ENODEV (or ESHUTDOWN); a card that is gone has no PCM of that name.
@@ -262,54 +355,18 @@ impl PcmSink for AlsaSink {
 
     fn open(&mut self, wanted: PcmParams) -> Result<PcmParams, PcmError> {
         self.close();
-        let rate_hz = wanted.sample_rate_hz;
-        // ALSA rates are whole numbers of frames per second.
-        if !(rate_hz.is_finite() && rate_hz >= 1.0 && rate_hz <= f64::from(u32::MAX) && rate_hz.fract() == 0.0) {
-            return Err(PcmError::Params(format!("{}: {rate_hz} Hz is not a whole rate ALSA can ask for", self.name)));
-        }
-        if wanted.channels == 0 {
-            return Err(PcmError::Params(format!("{}: 0 channels", self.name)));
-        }
-        let name = CString::new(self.name.as_str())
-            .map_err(|_| PcmError::Params(format!("PCM name {:?} contains a NUL byte", self.name)))?;
+        let (pcm, format, opened, period_frames, buffer_frames) = open_pcm(&self.name, Direction::Playback, wanted)?;
         let err = |doing: &str| {
             let pcm_name = self.name.clone();
             let doing = doing.to_string();
             move |e| map_error(&pcm_name, &doing, e)
         };
-        let pcm = PCM::open(&name, Direction::Playback, false).map_err(err("opening for playback"))?;
-        let format = {
-            let hw = HwParams::any(&pcm).map_err(err("reading its parameters"))?;
-            // Refuse ALSA's own resampling: the device runs at the rate we ask, or we see that it does not.
-            hw.set_rate_resample(false).map_err(err("turning resampling off"))?;
-            hw.set_access(Access::RWInterleaved).map_err(err("asking for interleaved access"))?;
-            // Nearest values, not exact ones: the device then opens at what it can, we read it back, and the
-            // driver refuses a mismatch with both numbers in its message.
-            hw.set_channels_near(wanted.channels).map_err(err("setting the channel count"))?;
-            hw.set_rate_near(rate_hz as u32, ValueOr::Nearest).map_err(err("setting the rate"))?;
-            let format =
-                SampleFormat::PREFERENCE.into_iter().find(|f| hw.test_format(f.alsa()).is_ok()).ok_or_else(|| {
-                    PcmError::Params(format!("{}: offers none of FLOAT_LE, S32_LE, S24_LE, S24_3LE, S16_LE", self.name))
-                })?;
-            hw.set_format(format.alsa()).map_err(err("setting the sample format"))?;
-            hw.set_buffer_time_near(BUFFER_TIME_US, ValueOr::Nearest).map_err(err("setting the buffer time"))?;
-            hw.set_period_time_near(PERIOD_TIME_US, ValueOr::Nearest).map_err(err("setting the period time"))?;
-            pcm.hw_params(&hw).map_err(err("applying the parameters"))?;
-            format
-        };
-        let (opened, period_frames, buffer_frames) = {
-            let hw = pcm.hw_params_current().map_err(err("reading back its parameters"))?;
-            let rate = hw.get_rate().map_err(err("reading back the rate"))?;
-            let channels = hw.get_channels().map_err(err("reading back the channel count"))?;
-            let period = hw.get_period_size().map_err(err("reading back the period"))?;
-            let buffer = hw.get_buffer_size().map_err(err("reading back the buffer"))?;
-            (PcmParams { sample_rate_hz: f64::from(rate), channels }, period, buffer)
-        };
         {
             // Start only once the buffer is full (or explicitly, for a short buffer), not after the first period:
             // a stream started early underruns while the writer is still filling it.
             let sw = pcm.sw_params_current().map_err(err("reading the software parameters"))?;
-            sw.set_start_threshold(buffer_frames).map_err(err("setting the start threshold"))?;
+            let threshold = alsa::pcm::Frames::try_from(buffer_frames).unwrap_or(alsa::pcm::Frames::MAX);
+            sw.set_start_threshold(threshold).map_err(err("setting the start threshold"))?;
             pcm.sw_params(&sw).map_err(err("applying the software parameters"))?;
         }
         self.negotiated = Some(Negotiated {
@@ -507,6 +564,35 @@ mod tests {
         let third_code = (1.0 / 3.0 / 32767.0) as f32;
         let s16 = encode(&[half_code * 1.001, third_code, -third_code], SampleFormat::S16);
         assert_eq!(s16, [1, 0, 0, 0, 0, 0]);
+    }
+
+    #[test]
+    fn decoding_inverts_encoding_to_a_code_and_reads_the_extremes() {
+        let samples: Vec<f32> = vec![1.0, -1.0, 0.0, 0.5, -0.25, 0.123_456, -0.987_654];
+        for (format, bits) in [
+            (SampleFormat::F32, 24),
+            (SampleFormat::S32, 31),
+            (SampleFormat::S24, 23),
+            (SampleFormat::S24Packed, 23),
+            (SampleFormat::S16, 15),
+        ] {
+            let back = decode(&encode(&samples, format), format);
+            assert_eq!(back.len(), samples.len());
+            // Half a code of the format (f32's own 24-bit mantissa for floats) plus f32's rounding of the input.
+            let code = 0.5 / f64::from((1_u32 << bits) - 1) + 1e-7;
+            for (x, y) in samples.iter().zip(&back) {
+                assert!((f64::from(*x) - y).abs() <= code, "{format:?}: {x} read back as {y}");
+            }
+            // Full scale reads exactly +/-1.
+            assert_eq!((back[0], back[1]), (1.0, -1.0), "{format:?}");
+        }
+        // The most negative integer codes read a little below -1; a trailing partial sample is ignored; a float
+        // that is not finite reads 0.
+        assert!(decode(&i16::MIN.to_le_bytes(), SampleFormat::S16)[0] < -1.0);
+        assert!(decode(&[0x00, 0x00, 0x80], SampleFormat::S24Packed)[0] < -1.0);
+        assert_eq!(decode(&[1, 2, 3], SampleFormat::S16).len(), 1);
+        let odd = [f32::NAN.to_le_bytes(), f32::INFINITY.to_le_bytes()].concat();
+        assert_eq!(decode(&odd, SampleFormat::F32), [0.0, 0.0]);
     }
 
     #[test]

@@ -7,6 +7,8 @@
 //!   sound card: the exact rate with ALSA's resampler off, the first sample format the device offers among
 //!   `FLOAT_LE`, `S32_LE`, `S24_LE`, `S24_3LE` and `S16_LE` (converted from `f32`), a writer thread that recovers
 //!   from underruns (xruns) and counts them.
+//! - `AlsaCaptureDaq` (feature `alsa`): the interface's inputs as the [`Daq`](metaplate_core::daq::Daq)
+//!   capability, through the same stream set-up, read in blocks of volts (the inputs' declared full scale).
 //! - [`AudioDriver`]: `AudioOut` over any `PcmSink`: refuses a device that opens at another rate or channel count
 //!   than asked, checks buffers, interleaves them as `f32` clipped at full scale, reports underruns, reopens and
 //!   re-applies the configuration.
@@ -17,11 +19,15 @@
 
 #[cfg(all(feature = "alsa", target_os = "linux"))]
 pub mod alsa;
+#[cfg(all(feature = "alsa", target_os = "linux"))]
+pub mod capture;
 pub mod driver;
 pub mod sink;
 
 #[cfg(all(feature = "alsa", target_os = "linux"))]
-pub use alsa::{AlsaSink, PcmListing, SampleFormat, playback_pcms};
+pub use alsa::{AlsaSink, PcmListing, SampleFormat, capture_pcms, decode, playback_pcms};
+#[cfg(all(feature = "alsa", target_os = "linux"))]
+pub use capture::AlsaCaptureDaq;
 
 pub use driver::AudioDriver;
 pub use sink::{PcmError, PcmParams, PcmSink, PcmStatus};

@@ -111,7 +111,7 @@ impl Backend {
 }
 
 /// Every backend of every capability.
-pub const BACKENDS: [Backend; 8] = [
+pub const BACKENDS: [Backend; 9] = [
     Backend {
         capability: Capability::Vibrometer,
         name: "polytec",
@@ -148,6 +148,16 @@ pub const BACKENDS: [Backend; 8] = [
         available: cfg!(feature = "nidaqmx"),
         linux_only: false,
         list: list_nidaqmx,
+    },
+    Backend {
+        capability: Capability::Daq,
+        name: "alsa",
+        needs: "a sound card's capture PCM (`device`, as `arecord -L` names it) at an exact rate, and its inputs' \
+                voltage at full scale (`full_scale_v`, from its manual)",
+        feature: "alsa",
+        available: cfg!(all(feature = "alsa", target_os = "linux")),
+        linux_only: true,
+        list: list_alsa_capture,
     },
     Backend {
         capability: Capability::Audio,
@@ -234,9 +244,23 @@ fn list_nidaqmx() -> Result<Vec<Found>, ListError> {
 }
 
 /// ALSA playback PCMs with the channel counts and rates they accept.
-#[cfg(all(feature = "alsa", target_os = "linux"))]
 fn list_alsa() -> Result<Vec<Found>, ListError> {
-    let pcms = metaplate_audio::playback_pcms().map_err(|e| ListError { backend: "alsa", detail: e.to_string() })?;
+    list_pcms(true)
+}
+
+/// ALSA capture PCMs with the channel counts and rates they accept.
+fn list_alsa_capture() -> Result<Vec<Found>, ListError> {
+    list_pcms(false)
+}
+
+#[cfg(all(feature = "alsa", target_os = "linux"))]
+fn list_pcms(playback: bool) -> Result<Vec<Found>, ListError> {
+    let (pcms, key) = if playback {
+        (metaplate_audio::playback_pcms(), "audio.device")
+    } else {
+        (metaplate_audio::capture_pcms(), "daq.device")
+    };
+    let pcms = pcms.map_err(|e| ListError { backend: "alsa", detail: e.to_string() })?;
     Ok(pcms
         .into_iter()
         .map(|pcm| {
@@ -244,13 +268,13 @@ fn list_alsa() -> Result<Vec<Found>, ListError> {
                 (Some((c0, c1)), Some((r0, r1))) => format!("{c0} to {c1} channels, {r0} to {r1} Hz"),
                 _ => pcm.note,
             };
-            Found { key: "audio.device", value: pcm.name, description: format!("{}: {ranges}", pcm.card) }
+            Found { key, value: pcm.name, description: format!("{}: {ranges}", pcm.card) }
         })
         .collect())
 }
 
 #[cfg(not(all(feature = "alsa", target_os = "linux")))]
-fn list_alsa() -> Result<Vec<Found>, ListError> {
+fn list_pcms(_playback: bool) -> Result<Vec<Found>, ListError> {
     list_nothing()
 }
 

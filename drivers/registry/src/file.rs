@@ -163,6 +163,20 @@ pub enum DaqSection {
     LabjackU6(LabjackU6Daq),
     /// `backend = "nidaqmx"`: an NI DAQ through NI-DAQmx.
     Nidaqmx(NidaqmxDaq),
+    /// `backend = "alsa"`: the audio interface's own inputs, through ALSA.
+    Alsa(AlsaDaq),
+}
+
+/// `[daq]` with `backend = "alsa"`: the inputs of a sound card (often the interface that plays the drive: one
+/// clock for both).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlsaDaq {
+    /// ALSA capture PCM name (`arecord -L`; `metaplate devices` lists the cards' capture PCMs).
+    pub device: String,
+    /// The inputs' voltage at digital full scale, V (from the interface's manual at the gain in use; for example
+    /// 1.74 for +4 dBu line inputs at 0 dB): `wiring.daq_range_v` must be this.
+    pub full_scale_v: f64,
 }
 
 /// `[daq]` with `backend = "labjack-u6"`.
@@ -364,6 +378,7 @@ impl HardwareFile {
         let daq = match section(path, Capability::Daq, raw.daq)? {
             ("labjack-u6", rest) => DaqSection::LabjackU6(keys(path, "daq", rest)?),
             ("nidaqmx", rest) => DaqSection::Nidaqmx(keys(path, "daq", rest)?),
+            ("alsa", rest) => DaqSection::Alsa(keys(path, "daq", rest)?),
             (other, _) => return Err(unknown_backend(path, Capability::Daq, other)),
         };
         let audio = match section(path, Capability::Audio, raw.audio)? {
@@ -414,6 +429,20 @@ impl HardwareFile {
             DaqSection::Nidaqmx(ni) => {
                 ni.settings(path).map_err(|(key, reason)| bad(&key, reason))?;
             }
+            DaqSection::Alsa(alsa) => {
+                let full_scale_v = alsa.full_scale_v;
+                if !(full_scale_v.is_finite() && full_scale_v > 0.0) {
+                    return Err(bad("daq.full_scale_v", format!("{full_scale_v} V is not a voltage above 0")));
+                }
+                // The interface's inputs have one range: the recipes ask for the wiring's.
+                if file.wiring.daq_range_v != full_scale_v {
+                    let detail = format!(
+                        "{} V, but the interface's inputs read +/-{full_scale_v} V at full scale (`daq.full_scale_v`)",
+                        file.wiring.daq_range_v
+                    );
+                    return Err(bad("wiring.daq_range_v", detail));
+                }
+            }
         }
         if let Some(KeypadSection::Hidraw(keypad)) = &file.keypad {
             UsbIds::parse(&keypad.usb).map_err(|reason| bad("keypad.usb", reason))?;
@@ -453,6 +482,7 @@ impl HardwareFile {
                 match self.daq {
                     DaqSection::LabjackU6(_) => "labjack-u6",
                     DaqSection::Nidaqmx(_) => "nidaqmx",
+                    DaqSection::Alsa(_) => "alsa",
                 },
             ),
             (

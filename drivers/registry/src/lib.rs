@@ -86,7 +86,7 @@ mod zaber;
 
 pub use backends::{BACKENDS, Backend, Capability, Found, ListError};
 pub use file::{
-    AlsaAudio, AnalogLdv, AudioSection, DaqSection, HardwareError, HardwareFile, HidrawKeypad, KeypadSection,
+    AlsaAudio, AlsaDaq, AnalogLdv, AudioSection, DaqSection, HardwareError, HardwareFile, HidrawKeypad, KeypadSection,
     LabjackU6Daq, LdvSection, PolytecLdv, UsbIds, WiringSection,
 };
 pub use listing::{Listing, draft_hardware_file, list_connected, listings_json, listings_text};

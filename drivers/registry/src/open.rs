@@ -155,6 +155,15 @@ fn open_daq(section: &DaqSection, file_path: &Path) -> Result<Box<dyn metaplate_
                 Err(not_built(Capability::Daq, "nidaqmx", &ni.device))
             }
         }
+        DaqSection::Alsa(alsa) => {
+            // Opened when the recipe configures it (rate, inputs), as ALSA opens a stream.
+            #[cfg(all(feature = "alsa", target_os = "linux"))]
+            {
+                Ok(Box::new(metaplate_audio::AlsaCaptureDaq::new(&alsa.device, alsa.full_scale_v)))
+            }
+            #[cfg(not(all(feature = "alsa", target_os = "linux")))]
+            Err(not_built(Capability::Daq, "alsa", &alsa.device))
+        }
     }
 }
 

@@ -57,6 +57,28 @@ fn nidaqmx_and_the_keypad_are_selectable() {
     assert_eq!(named, ["polytec", "nidaqmx", "alsa", "hidraw"]);
 }
 
+/// The audio interface's own inputs as the DAQ: the capture PCM and the inputs' full scale, which the wiring's DAQ
+/// range must be; opening it opens nothing yet (ALSA opens a stream when the recipe configures its rate and inputs).
+#[test]
+fn the_audio_interfaces_inputs_are_selectable_as_the_daq() {
+    let example = parse(EXAMPLE).unwrap();
+    let range_v = example.wiring.daq_range_v;
+    let text =
+        with_daq(&format!("[daq]\nbackend = \"alsa\"\ndevice = \"hw:CARD=24Ao,DEV=0\"\nfull_scale_v = {range_v:?}\n"));
+    let file = parse(&text).unwrap();
+    let DaqSection::Alsa(alsa) = &file.daq else { panic!("{:?}", file.daq) };
+    assert_eq!((alsa.device.as_str(), alsa.full_scale_v), ("hw:CARD=24Ao,DEV=0", range_v));
+    assert_eq!(file.backends()[1], (Capability::Daq, "alsa"));
+    for (daq, key) in [
+        ("device = \"hw:0\"\nfull_scale_v = -1.0\n", "daq.full_scale_v"),
+        ("device = \"hw:0\"\nfull_scale_v = 1.737\n", "wiring.daq_range_v"),
+        ("device = \"hw:0\"\n", "daq"),
+    ] {
+        let err = parse(&with_daq(&format!("[daq]\nbackend = \"alsa\"\n{daq}"))).unwrap_err();
+        assert!(matches!(&err, HardwareError::File { key: k, .. } if k.starts_with(key)), "{daq}: {err}");
+    }
+}
+
 /// The example with an NI DAQ `Dev1` and the `[daq]` keys `rest` (which may open `[daq.inputs.aiN]` tables).
 fn ni(rest: &str) -> String {
     with_daq(&format!("[daq]\nbackend = \"nidaqmx\"\ndevice = \"Dev1\"\n{rest}"))
