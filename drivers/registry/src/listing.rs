@@ -101,10 +101,16 @@ pub fn listings_text(listings: &[Listing]) -> String {
     text
 }
 
-/// The hardware file's line for `key`: the first value found, the others as comment lines; or `placeholder` with a
-/// CHOOSE comment.
-fn choose(listings: &[Listing], key: &str, placeholder: &str, what: &str) -> String {
-    let found: Vec<&Found> = listings.iter().flat_map(|l| &l.found).filter(|f| f.key == key).collect();
+/// What the backend `backend` found for the hardware file's `key` (two backends may fill one key: an NI device's and
+/// a capture PCM's are both `daq.device`).
+fn found<'a>(listings: &'a [Listing], backend: &str, key: &str) -> Vec<&'a Found> {
+    listings.iter().filter(|l| l.backend.name == backend).flat_map(|l| &l.found).filter(|f| f.key == key).collect()
+}
+
+/// The hardware file's line for `key`: the first value `backend` found, the others as comment lines; or
+/// `placeholder` with a CHOOSE comment.
+fn choose(listings: &[Listing], backend: &str, key: &str, placeholder: &str, what: &str) -> String {
+    let found = found(listings, backend, key);
     let field = key.split('.').nth(1).unwrap_or(key);
     match found.split_first() {
         None => format!("{field} = \"{placeholder}\"   # CHOOSE: no {what} was found; put its name here\n"),
@@ -137,23 +143,32 @@ pub fn draft_hardware_file(listings: &[Listing], path: &Path) -> Result<String, 
          plate = \"metamaterial\"   # CHOOSE: the scene describing your plate (built-in name or scene file)\n\n\
          [ldv]\nbackend = \"polytec\"\n",
     );
-    text.push_str(&choose(listings, "ldv.port", "/dev/ttyUSB0", "serial port"));
+    text.push_str(&choose(listings, "polytec", "ldv.port", "/dev/ttyUSB0", "serial port"));
     text.push_str("baud = 115200\n\n[daq]\n");
-    let nidaqmx = listings.iter().any(|l| l.found.iter().any(|f| f.key == "daq.device"));
-    if nidaqmx {
-        text.push_str("backend = \"nidaqmx\"   # CHOOSE: or \"labjack-u6\" with serial = \"360012345\"\n");
-        text.push_str(&choose(listings, "daq.device", "Dev1", "NI-DAQmx device"));
-    } else {
+    let ni_devices = found(listings, "nidaqmx", "daq.device");
+    if ni_devices.is_empty() {
         text.push_str("backend = \"labjack-u6\"   # CHOOSE: or \"nidaqmx\" with device = \"Dev1\"\n");
-        text.push_str(&choose(listings, "daq.serial", "360012345", "LabJack U6"));
+        text.push_str(&choose(listings, "labjack-u6", "daq.serial", "360012345", "LabJack U6"));
+    } else {
+        text.push_str("backend = \"nidaqmx\"   # CHOOSE: or \"labjack-u6\" with serial = \"360012345\"\n");
+        text.push_str(&choose(listings, "nidaqmx", "daq.device", "Dev1", "NI-DAQmx device"));
+    }
+    for pcm in found(listings, "alsa", "daq.device") {
+        // The interface's own inputs can be the DAQ instead: named, not chosen (their full scale is the manual's).
+        let _ = writeln!(
+            text,
+            "# or the audio interface's inputs: backend = \"alsa\", device = \"{}\"{}, full_scale_v = (its manual's)",
+            pcm.value,
+            described(pcm)
+        );
     }
     text.push_str("\n[audio]\nbackend = \"alsa\"\n");
-    text.push_str(&choose(listings, "audio.device", "hw:CARD=24Ao,DEV=0", "ALSA playback PCM"));
+    text.push_str(&choose(listings, "alsa", "audio.device", "hw:CARD=24Ao,DEV=0", "ALSA playback PCM"));
     text.push_str(
         "sample_rate_hz = 48000.0   # CHECK: a rate the interface runs at exactly\n\
          channels = 9               # CHECK: at least the 8 actuators and the loopback\n\n",
     );
-    let keypads: Vec<&Found> = listings.iter().flat_map(|l| &l.found).filter(|f| f.key == "keypad.usb").collect();
+    let keypads = found(listings, "hidraw", "keypad.usb");
     text.push_str(
         "# Optional: the response keypad. CHOOSE: uncomment to use one.\n# [keypad]\n# backend = \"hidraw\"\n",
     );
@@ -163,7 +178,7 @@ pub fn draft_hardware_file(listings: &[Listing], path: &Path) -> Result<String, 
         }
         None => text.push_str("# usb = \"VID:PID\"   # no HID keyboard or keypad was found\n"),
     }
-    if let Some(chain) = listings.iter().flat_map(|l| &l.found).find(|f| f.key == "aim.port") {
+    if let Some(chain) = found(listings, "zaber", "aim.port").first() {
         // A Zaber chain answered: the stages as the aimer, commented out until the axes are checked.
         let _ = write!(
             text,
@@ -175,7 +190,7 @@ pub fn draft_hardware_file(listings: &[Listing], path: &Path) -> Result<String, 
             chain.value
         );
     }
-    if let Some(ni) = listings.iter().flat_map(|l| &l.found).find(|f| f.key == "daq.device") {
+    if let Some(ni) = ni_devices.first() {
         // An NI device: galvo mirrors on two of its analog outputs, commented out until their map is taught.
         let _ = write!(
             text,
@@ -245,6 +260,21 @@ mod tests {
         assert!(uncommented.contains("[aim.outputs]\nbackend = \"nidaqmx\"\ndevice = \"Dev2\"\n"), "{uncommented}");
         let file = HardwareFile::parse(&uncommented, Path::new("draft.toml")).unwrap();
         assert!(file.aim.is_some(), "{uncommented}");
+    }
+
+    #[test]
+    fn a_capture_pcm_is_named_as_the_alternative_not_taken_for_an_ni_device() {
+        let mut listings: Vec<Listing> =
+            BACKENDS.iter().map(|backend| Listing { backend, found: Vec::new(), problem: None }).collect();
+        let pcm = Found { key: "daq.device", value: "hw:CARD=24Ao,DEV=0".into(), description: "MOTU 24Ao".into() };
+        let at = listings.iter().position(|l| l.backend.name == "alsa" && l.backend.capability == Capability::Daq);
+        listings[at.unwrap()].found = vec![pcm];
+        let text = draft_hardware_file(&listings, Path::new("draft.toml")).unwrap();
+        assert!(text.contains("backend = \"labjack-u6\""), "no NI device was found: {text}");
+        assert!(!text.contains("# [aim]\n# backend = \"galvo\""), "no galvo outputs on a sound card: {text}");
+        assert!(
+            text.contains("# or the audio interface's inputs: backend = \"alsa\", device = \"hw:CARD=24Ao,DEV=0\"")
+        );
     }
 
     #[test]
