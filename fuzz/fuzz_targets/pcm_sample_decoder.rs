@@ -12,7 +12,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use metaplate_audio::{SampleFormat, decode};
+use metaplate_audio::{SampleFormat, decode, encode};
 
 fuzz_target!(|data: &[u8]| {
     let Some((&pick, bytes)) = data.split_first() else { return };
@@ -28,7 +28,7 @@ fuzz_target!(|data: &[u8]| {
         assert!(*value <= 1.0 && *value >= -1.0 - 1e-4, "{format:?} {sample:?}: {value}");
         // A code other than the most negative re-encodes to its own bytes (S24's padding byte is not data).
         if *value >= -1.0 {
-            let again = metaplate_audio::alsa::encode(&[*value as f32], format);
+            let again = encode(&[*value as f32], format);
             let data_bytes = if format == SampleFormat::S24 { 3 } else { width };
             // f32 keeps 24 bits: exact for 16- and 24-bit codes; S32 is checked to within f32's rounding.
             if format != SampleFormat::S32 {

@@ -12,7 +12,8 @@ use alsa::Direction;
 use alsa::pcm::PCM;
 use metaplate_core::daq::{BlockIntegrity, Daq, DaqBlock, DaqConfig, DaqError, DaqIdentity};
 
-use crate::alsa::{SampleFormat, decode, map_error, open_pcm};
+use crate::alsa::{map_error, open_pcm};
+use crate::samples::{SampleFormat, decode};
 use crate::sink::{PcmError, PcmParams};
 
 /// The largest block, frames: a DAQ block is read in one piece (about 20 s at 48 kHz).
@@ -115,8 +116,8 @@ impl AlsaCaptureDaq {
         Ok(())
     }
 
-    fn read_frames(&mut self, frames: usize) -> Result<Vec<u8>, DaqError> {
-        let name = self.name.clone();
+    fn read_frames(&self, frames: usize) -> Result<Vec<u8>, DaqError> {
+        let name = &self.name;
         let Some(stream) = self.stream.as_ref() else {
             return Err(DaqError::Protocol { detail: format!("{name}: read before configure") });
         };
@@ -126,7 +127,7 @@ impl AlsaCaptureDaq {
         let io = stream.pcm.io_bytes();
         while filled < frames {
             let ready =
-                stream.pcm.wait(Some(WAIT_MS)).map_err(|e| daq_error(map_error(&name, "waiting for samples", e)))?;
+                stream.pcm.wait(Some(WAIT_MS)).map_err(|e| daq_error(map_error(name, "waiting for samples", e)))?;
             if !ready {
                 return Err(DaqError::Timeout { what: format!("{name}: captured samples"), attempts: 1 });
             }
@@ -141,7 +142,7 @@ impl AlsaCaptureDaq {
                         ),
                     });
                 }
-                Err(e) => return Err(daq_error(map_error(&name, "reading samples", e))),
+                Err(e) => return Err(daq_error(map_error(name, "reading samples", e))),
             }
         }
         Ok(bytes)
@@ -179,19 +180,18 @@ impl Daq for AlsaCaptureDaq {
     }
 
     fn read_block(&mut self) -> Result<DaqBlock, DaqError> {
-        let (true, Some(config)) = (self.running, self.config.clone()) else {
+        let (true, Some(frames)) = (self.running, self.config.as_ref().map(|c| c.block_len_samples as usize)) else {
             return Err(DaqError::Protocol { detail: format!("{}: read while not running", self.name) });
         };
-        let frames = config.block_len_samples as usize;
+        // An overrun or a fault ends the acquisition, as the capability says.
         let bytes = match self.read_frames(frames) {
             Ok(bytes) => bytes,
             Err(e) => {
-                // An overrun or a fault ends the acquisition, as the capability says.
                 self.running = false;
                 return Err(e);
             }
         };
-        let Some(stream) = self.stream.as_ref() else {
+        let (Some(stream), Some(config)) = (self.stream.as_ref(), self.config.as_ref()) else {
             return Err(DaqError::Protocol { detail: format!("{}: the stream went away", self.name) });
         };
         let values = decode(&bytes, stream.format);
@@ -200,10 +200,9 @@ impl Daq for AlsaCaptureDaq {
             .channels
             .iter()
             .map(|c| {
-                let input = usize::from(c.input);
                 values
                     .iter()
-                    .skip(input)
+                    .skip(usize::from(c.input))
                     .step_by(stream.channels)
                     .map(|&x| {
                         clipped |= x.abs() >= 1.0;

@@ -22,12 +22,14 @@ pub mod alsa;
 #[cfg(all(feature = "alsa", target_os = "linux"))]
 pub mod capture;
 pub mod driver;
+pub mod samples;
 pub mod sink;
 
 #[cfg(all(feature = "alsa", target_os = "linux"))]
-pub use alsa::{AlsaSink, PcmListing, SampleFormat, capture_pcms, decode, playback_pcms};
+pub use alsa::{AlsaSink, PcmListing, capture_pcms, playback_pcms};
 #[cfg(all(feature = "alsa", target_os = "linux"))]
 pub use capture::AlsaCaptureDaq;
 
 pub use driver::AudioDriver;
+pub use samples::{SampleFormat, decode, encode};
 pub use sink::{PcmError, PcmParams, PcmSink, PcmStatus};

@@ -98,6 +98,22 @@ impl RodSpec {
     pub fn free_mass_kg(&self) -> f64 {
         self.density_kg_m3 * self.area_m2() * self.free_length_m()
     }
+
+    /// First bending mode of the free length clamped at the plate's face, Hz (an upper bound on the rod in the
+    /// cell: the plate is compliant).
+    pub fn clamped_resonance_hz(&self) -> f64 {
+        cantilever_first_mode_hz(self.diameter_m, self.youngs_modulus_pa, self.density_kg_m3, self.free_length_m())
+    }
+}
+
+/// First bending mode of a solid round rod clamped at one end and free at the other (Euler-Bernoulli),
+/// `(1.875^2 / 2 pi) (d / 4) sqrt(E / rho) / L^2`, Hz. Valid for slender rods (length well over the diameter);
+/// finite and positive for finite, positive arguments.
+pub fn cantilever_first_mode_hz(diameter_m: f64, youngs_modulus_pa: f64, density_kg_m3: f64, length_m: f64) -> f64 {
+    // beta L of a clamped-free beam's first mode.
+    let beta_l = 1.875_104_068_711_961_f64;
+    beta_l * beta_l / (2.0 * std::f64::consts::PI) * (diameter_m / 4.0) * (youngs_modulus_pa / density_kg_m3).sqrt()
+        / length_m.powi(2)
 }
 
 /// A point mass on a vertical spring attached to a small rigid footprint: the textbook local resonator (and the

@@ -143,13 +143,7 @@ pub fn fit_rocking_rod(design: &Design, first_branch: &[(f64, f64)]) -> Result<R
     let params = Params::of(design);
     // Start: the bare plate, a rigid rod turning about its base, the joint at the clamped rod's first mode.
     let free = rod.free_length_m();
-    let start = [
-        1.0_f64.ln(),
-        (rod.free_mass_kg() * free * free / 3.0).ln(),
-        (1.875_f64.powi(2) / (2.0 * PI) * (rod.diameter_m / 4.0) * (rod.youngs_modulus_pa / rod.density_kg_m3).sqrt()
-            / (free * free))
-            .ln(),
-    ];
+    let start = [1.0_f64.ln(), (rod.free_mass_kg() * free * free / 3.0).ln(), rod.clamped_resonance_hz().ln()];
     let residuals = |p: &[f64; 3]| -> Vec<f64> {
         points.iter().map(|&(k, f)| params.freq_hz(k, p[0].exp(), p[1].exp(), p[2].exp()) / f - 1.0).collect()
     };

@@ -26,7 +26,7 @@ use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::sync::Mutex;
 
-use metaplate_core::design::Design;
+use metaplate_core::design::{Design, cantilever_first_mode_hz};
 use metaplate_design::RockingRodFit;
 
 use metaplate_core::scene::{ResonatorModel, ResonatorSpec, Scene};
@@ -157,11 +157,7 @@ pub fn design_fit(design: &Design) -> Result<RockingRodFit, PlateError> {
 
 /// First bending mode of a rod clamped at its base and free at its tip, Hz.
 fn clamped_rod_resonance_hz(spec: &ResonatorSpec) -> f64 {
-    let beta_l = 1.875_104_068_711_961_f64;
-    beta_l * beta_l / (2.0 * PI)
-        * (spec.rod_diameter_m / 4.0)
-        * (spec.rod_youngs_modulus_pa / spec.rod_density_kg_m3).sqrt()
-        / spec.rod_height_m.powi(2)
+    cantilever_first_mode_hz(spec.rod_diameter_m, spec.rod_youngs_modulus_pa, spec.rod_density_kg_m3, spec.rod_height_m)
 }
 
 impl Resonators {

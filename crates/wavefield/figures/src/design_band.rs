@@ -85,7 +85,7 @@ pub fn design_band(design: &Design, band: &BandDiagram) -> BandFigure {
     };
     let freqs: Vec<f64> = (1..=100).map(|i| f_max * f64::from(i) / 100.0).collect();
     BandFigure {
-        title: format!("Band structure of the {} unit cell (up to {clip_hz:.0} Hz)", band.design),
+        title: format!("Band structure of the {} unit cell (branches drawn up to {clip_hz:.0} Hz)", band.design),
         branches,
         a0_folded,
         resonator_hz: band.resonator_mode_hz,
