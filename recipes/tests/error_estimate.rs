@@ -50,8 +50,9 @@ fn estimated_and_true(scene: &Scene, protocol: &str) -> (Vec<(f64, f64)>, Vec<Op
 }
 
 /// The untaped plate with its light and speckle (the noise varies over the plate) and every other imperfection
-/// off, its noise floor set so that the noise lies 15 to 25 dB above the metamaterial's processing floor (-45 dB:
-/// its response outlasting the stored window, `metaplate budget`): the error is then the noise's, row by row.
+/// off, its noise floor set so that the noise lies well above the metamaterial's processing floor (about -45 dB:
+/// its response outlasting the stored window, `metaplate budget`): the `quick` protocol's rows lie between -33 and
+/// -8 dB, median -20 dB, so the error is the noise's, row by row.
 fn noisy() -> Scene {
     let untaped = Scene::builtin("metamaterial-untaped").unwrap();
     let mut scene = untaped.with_only(&[Imperfection::LdvNoise, Imperfection::Speckle]);
@@ -92,21 +93,24 @@ fn where_a_shared_bias_sets_the_error_the_estimate_is_a_lower_bound() {
 
 #[test]
 fn sequential_adaptive_rounds_stop_each_row_at_its_target() {
-    // Each actuator is played until its own estimated error reaches -27 dB (at most 6 x 2 periods of 0.6 s, a
+    // Each actuator is played until its own estimated error reaches -22 dB (at most 6 x 2 periods of 0.6 s, a
     // first shot of 2, then shots of the periods its estimate says are missing): every row ends at or below the
     // target or is flagged as short of it, and the true errors follow (the estimate is within 3 dB of them, the
     // first test), with rows taking different numbers of periods, so a point costs less than if every row took its
-    // whole budget.
-    let (rows, statuses, per_point_s) = estimated_and_true(&noisy(), "sequential-adaptive:0.6x2@-27/6");
+    // whole budget. The target lies 2 dB below the `quick` protocol's median error on this plate (-20 dB, the first
+    // test's rows, from 2 s of sweep); the budget's 7.2 s gives up to 5.6 dB more than that: within reach for most
+    // rows, not for the weakest.
+    const TARGET_DB: f64 = -22.0;
+    let (rows, statuses, per_point_s) = estimated_and_true(&noisy(), "sequential-adaptive:0.6x2@-22/6");
     assert_eq!(statuses.len(), rows.len());
     for ((e, t), status) in rows.iter().zip(&statuses) {
         // A row short of the target after its 6 shots is flagged, never passed off as reaching it.
-        assert!(*e <= -27.0 || *status == Some(Status::Failed), "estimated {e:.1} dB, true {t:.1} dB, {status:?}");
+        assert!(*e <= TARGET_DB || *status == Some(Status::Failed), "estimated {e:.1} dB, true {t:.1} dB, {status:?}");
     }
-    let at_target = share(&rows, |e, _| e <= -27.0);
+    let at_target = share(&rows, |e, _| e <= TARGET_DB);
     assert!(at_target >= 0.75, "{:.0} % of rows reached the target", at_target * 100.0);
-    let reached: Vec<(f64, f64)> = rows.iter().copied().filter(|(e, _)| *e <= -27.0).collect();
-    let true_ok = share(&reached, |_, t| t <= -27.0 + 3.0);
+    let reached: Vec<(f64, f64)> = rows.iter().copied().filter(|(e, _)| *e <= TARGET_DB).collect();
+    let true_ok = share(&reached, |_, t| t <= TARGET_DB + 3.0);
     assert!(true_ok >= 0.9, "{:.0} % of the rows at the target truly within 3 dB of it", true_ok * 100.0);
     // Every row's whole budget, 12 periods (7.2 s) in three shots (3 x 0.6 s of ring-out and margin), for all 8
     // actuators would be 72 s per point, beam moves aside.

@@ -21,7 +21,9 @@ use std::path::{Path, PathBuf};
 
 use metaplate_analysis::dataset_figures::write_comparison_figures;
 use metaplate_analysis::dataset_report::DatasetAnalysis;
-use metaplate_analysis::paper_table::{DISPERSION_FREQS_HZ, PLATES, PlateResults, columns, paper_rows};
+use metaplate_analysis::paper_table::{
+    DISPERSION_FREQS_HZ, ModelWavelength, PLATES, PlateResults, columns, paper_rows,
+};
 use metaplate_control::focus::{PixelSpec, RenderOptions, render};
 use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
@@ -417,15 +419,15 @@ impl Pattern {
 impl DemoSummary {
     /// The paper-against-suite table and one line per plate on its measurement, as the demo prints them.
     pub fn table_text(&self) -> String {
-        let wavelengths: BTreeMap<&str, Vec<(f64, f64)>> =
-            self.plates.iter().map(|(name, p)| (name.as_str(), p.dispersion.wavelengths_m())).collect();
+        let wavelengths: BTreeMap<&str, Vec<ModelWavelength>> =
+            self.plates.iter().map(|(name, p)| (name.as_str(), p.dispersion.model_wavelengths())).collect();
         let results: Vec<PlateResults<'_>> = self
             .plates
             .iter()
             .map(|(name, p)| PlateResults {
                 name,
                 analysis: Some(&p.analysis),
-                model_wavelengths_m: wavelengths.get(name.as_str()).map(Vec::as_slice),
+                model_wavelengths: wavelengths.get(name.as_str()).map(Vec::as_slice),
                 pattern_peak_velocity_m_s: Some(p.pattern.peak_velocity_m_s()),
             })
             .collect();
@@ -459,8 +461,8 @@ impl DemoSummary {
     /// # Errors
     /// As [`write_report`].
     pub fn write_report(&self, path: &Path) -> Result<(), EvaluationError> {
-        let wavelengths: BTreeMap<&str, Vec<(f64, f64)>> =
-            self.plates.iter().map(|(name, p)| (name.as_str(), p.dispersion.wavelengths_m())).collect();
+        let wavelengths: BTreeMap<&str, Vec<ModelWavelength>> =
+            self.plates.iter().map(|(name, p)| (name.as_str(), p.dispersion.model_wavelengths())).collect();
         let scans: BTreeMap<&str, ScanMeasurement> = self
             .plates
             .iter()
@@ -487,7 +489,7 @@ impl DemoSummary {
                     analysis: &p.analysis,
                     scan: scans.get(name.as_str())?,
                     calibration_dir: Some(&p.calibration.dir),
-                    model_wavelengths_m: wavelengths.get(name.as_str()).map(Vec::as_slice),
+                    model_wavelengths: wavelengths.get(name.as_str()).map(Vec::as_slice),
                     pattern_peak_velocity_m_s: Some(p.pattern.peak_velocity_m_s()),
                 })
             })

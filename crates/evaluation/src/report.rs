@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 use metaplate_analysis::dataset_figures::{write_comparison_figures, write_dataset_figures};
 use metaplate_analysis::dataset_report::{DatasetAnalysis, analyse_dataset};
-use metaplate_analysis::paper_table::PLATES;
+use metaplate_analysis::paper_table::{ModelWavelength, PLATES};
 use metaplate_core::scene::Scene;
 use metaplate_recipes::Calibration;
 use metaplate_store::Dataset;
@@ -38,8 +38,8 @@ pub struct ReportPlate<'a> {
     pub scan: &'a ScanMeasurement,
     /// The calibration directory the scan was compensated with, where known.
     pub calibration_dir: Option<&'a str>,
-    /// The plate model's k-space wavelength per frequency `(Hz, m)`, where computed (the demo).
-    pub model_wavelengths_m: Option<&'a [(f64, f64)]>,
+    /// The plate model's k-space wavelength per frequency, where computed (the demo).
+    pub model_wavelengths: Option<&'a [ModelWavelength]>,
     /// The largest peak velocity at a pixel of a rendered pattern, m/s (the demo).
     pub pattern_peak_velocity_m_s: Option<f64>,
 }
@@ -156,7 +156,7 @@ pub fn report_on_datasets(request: &ReportRequest<'_>, progress: &mut dyn Progre
             analysis,
             scan,
             calibration_dir: None,
-            model_wavelengths_m: None,
+            model_wavelengths: None,
             pattern_peak_velocity_m_s: None,
         })
         .collect();

@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use metaplate_analysis::dispersion::{DispersionOptions, SceneLayout, wavelengths_at};
+use metaplate_analysis::paper_table::ModelWavelength;
 use metaplate_core::grid::GridSubset;
 use metaplate_core::scene::Scene;
 use metaplate_plate::{GreensFunctions, GreensRequest, ModelOptions, PlateModel};
@@ -56,9 +57,16 @@ pub struct DispersionPoint {
 }
 
 impl DispersionReport {
-    /// `(Hz, m)` of the k-space wavelength per frequency.
-    pub fn wavelengths_m(&self) -> Vec<(f64, f64)> {
-        self.points.iter().map(|p| (p.freq_hz, p.wavelength_m)).collect()
+    /// The k-space wavelength per frequency, resolved where at most half the actuators' estimates are flagged.
+    pub fn model_wavelengths(&self) -> Vec<ModelWavelength> {
+        self.points
+            .iter()
+            .map(|p| ModelWavelength {
+                freq_hz: p.freq_hz,
+                wavelength_m: p.wavelength_m,
+                resolved: 2 * p.actuators_flagged <= p.per_actuator_m.len(),
+            })
+            .collect()
     }
 
     /// The report as the table `metaplate simulate dispersion` prints without `--json`.

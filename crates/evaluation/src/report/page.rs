@@ -71,7 +71,7 @@ fn table_section(page: &mut String, plates: &[ReportPlate<'_>]) {
         .map(|p| PlateResults {
             name: p.name,
             analysis: Some(p.analysis),
-            model_wavelengths_m: p.model_wavelengths_m,
+            model_wavelengths: p.model_wavelengths,
             pattern_peak_velocity_m_s: p.pattern_peak_velocity_m_s,
         })
         .collect();

@@ -10,6 +10,9 @@ use metaplate_core::scene::{
 };
 
 const METAMATERIAL: &str = include_str!("../scenes/metamaterial.toml");
+/// The rods of 0.8's built-in metamaterial, key by key, in place of its design: a lattice a scene gives rod by rod.
+const KEYED_RODS: &str = "pitch_m = 0.008\nrod_height_m = 0.0334\nrod_diameter_m = 0.003175\nrod_youngs_modulus_pa = 97e9\n\
+                          rod_density_kg_m3 = 8489.0\n";
 const RECT_FAULTS: &str = include_str!("scenes/rect_faults.toml");
 
 // Positions here are sums and products of a few decimal lengths below 1 m: 1e-12 m is ~1e4 ulps, ample for rounding
@@ -34,7 +37,9 @@ fn builtins_load_validate_and_transcribe_the_paper() {
     }
     let meta = Scene::builtin("metamaterial").unwrap();
     assert_eq!(meta.resonators.model, ResonatorModel::RockingRod);
-    assert_eq!((meta.resonators.pitch_m, meta.resonators.rod_height_m), (0.008, 0.0334));
+    // The rods are the design `paper`'s: its lattice constant and whole rod height.
+    assert_eq!(meta.resonators.design, Some(metaplate_core::design::Design::paper()));
+    assert_eq!((meta.resonators.pitch_m, meta.resonators.rod_height_m), (0.008, 0.0334563));
     assert_eq!(Scene::builtin("homogeneous").unwrap().resonators.model, ResonatorModel::None);
     assert!(matches!(Scene::builtin("aluminium"), Err(SceneError::NotFound { .. })));
 }
@@ -186,15 +191,16 @@ fn resonator_lattice_and_mass_ratio() {
     // 421 counted independently (Python, same rule): > 300 as the paper says.
     assert_eq!(sites.len(), 421);
     assert!(sites.iter().all(|&(x, y)| s.plate.outline.distance_inside_m(x, y) >= 0.01));
-    // Rod mass / plate mass per cell, 19.8165 by hand (see metamaterial.toml); 1e-4 is the hand value's rounding.
+    // Rod mass / plate mass per cell: 8489 kg/m^3 x pi (3.175 mm)^2 / 4 x 33.4563 mm = 2.24860 g over 1180 kg/m^3 x
+    // 1.5 mm x (8 mm)^2 = 0.11328 g, 19.8499 by hand; 1e-4 is the hand value's rounding.
     let ratio = s.resonators.cell_mass_ratio(s.plate.mass_per_area_kg_m2()).unwrap();
-    assert!((ratio - 19.8165).abs() < 1e-4, "{ratio}");
-    // The built-in keeps the rods' own mass and resonance and carries one fitted override, a radius of gyration
-    // below a rigid rod's L / sqrt(3) (the plate model's dispersion tests own its value).
-    assert_eq!((s.resonators.mass_ratio, s.resonators.resonance_hz), (None, None));
-    let rigid_m = s.resonators.rod_height_m / 3f64.sqrt();
-    assert!(s.resonators.gyration_radius_m.is_some_and(|r| r > 0.0 && r < rigid_m), "{:?}", s.resonators);
-    assert!(s.resonators.gyration_radius_m() < rigid_m);
+    assert!((ratio - 19.8499).abs() < 1e-4, "{ratio}");
+    // The built-in takes its rods from its design and overrides nothing: the plate model takes the rest from the
+    // cell (its dispersion tests own the values).
+    assert_eq!(
+        (s.resonators.mass_ratio, s.resonators.resonance_hz, s.resonators.gyration_radius_m),
+        (None, None, None)
+    );
     let homo = Scene::builtin("homogeneous").unwrap();
     assert!(homo.resonators.lattice_sites_m(&homo.plate.outline).unwrap().is_empty());
     assert!(homo.resonators.cell_mass_ratio(homo.plate.mass_per_area_kg_m2()).is_err(), "0/0 is refused");
@@ -252,22 +258,26 @@ fn seed_beyond_toml_integers_is_refused() {
     assert_eq!(e.key_path(), Some("seed"));
 }
 
-/// Replaces the first `from` in the metamaterial scene by `to` (which must change the text).
-fn mutate(from: &str, to: &str) -> String {
-    assert!(METAMATERIAL.contains(from), "test setup: `{from}` is not in the scene");
-    METAMATERIAL.replacen(from, to, 1)
+/// The metamaterial scene with its rods given key by key (with a radius of gyration) instead of by its design.
+fn keyed() -> String {
+    let rods = format!("{KEYED_RODS}gyration_radius_m = 0.011\n");
+    assert!(METAMATERIAL.contains("design = \"paper\"\n"), "test setup: the built-in names no design");
+    METAMATERIAL.replacen("design = \"paper\"\n", &rods, 1)
 }
 
-/// The rods of the built-in metamaterial as its scene file gives them, key by key.
-const KEYED_RODS: &str = "pitch_m = 0.008\nrod_height_m = 0.0334\nrod_diameter_m = 0.003175\nrod_youngs_modulus_pa = 97e9\n\
-                          rod_density_kg_m3 = 8489.0\n";
-
-/// The metamaterial scene with its rods taken from the design `paper` instead (no rod key, no override), with its
-/// first `from` then replaced by `to`.
-fn designed(from: &str, to: &str) -> String {
-    let text = mutate(KEYED_RODS, "design = \"paper\"\n").replacen("gyration_radius_m = 0.011\n", "", 1);
+/// Replaces the first `from` in the metamaterial scene with its rods given key by key ([`keyed`]) by `to` (which
+/// must change the text).
+fn mutate(from: &str, to: &str) -> String {
+    let text = keyed();
     assert!(text.contains(from), "test setup: `{from}` is not in the scene");
     text.replacen(from, to, 1)
+}
+
+/// The built-in metamaterial scene, whose rods are the design `paper`'s (no rod key, no override), with its first
+/// `from` replaced by `to`.
+fn designed(from: &str, to: &str) -> String {
+    assert!(METAMATERIAL.contains(from), "test setup: `{from}` is not in the scene");
+    METAMATERIAL.replacen(from, to, 1)
 }
 
 /// A lattice naming a design takes the lattice constant and the rods from it, with no override; the scene's text
@@ -293,7 +303,7 @@ fn a_lattice_named_by_a_design_takes_its_rods_and_is_written_inline() {
     assert!(text.contains("[resonators.design]") && !text.contains("design = \"paper\""), "{text}");
     assert_eq!(Scene::from_toml_str(&text, "written").unwrap(), s);
     assert_eq!(toml::from_str::<Scene>(&text).unwrap(), s);
-    assert_ne!(s.id(), Scene::builtin("metamaterial").unwrap().id());
+    assert_eq!(s.id(), Scene::builtin("metamaterial").unwrap().id(), "the built-in is this scene");
     let dir = std::env::temp_dir().join(format!("metaplate-scene-design-{}", std::process::id()));
     std::fs::create_dir_all(dir.join("cells")).unwrap();
     std::fs::write(dir.join("cells/mine.toml"), toml::to_string(&paper).unwrap()).unwrap();
@@ -585,8 +595,9 @@ fn serde_form_is_the_file_form() {
 }
 
 /// The built-in scene's identity, pinned: a change here means every dataset's scene id and every Green's-function
-/// cache key changes (resumes refuse, caches recompute). Change it only with [`CANONICAL_FORM_VERSION`].
-const METAMATERIAL_ID: &str = "fnv1a64:0c2e80eb5d46bd60";
+/// cache key changes (resumes refuse, caches recompute). Change it only with [`CANONICAL_FORM_VERSION`], or with the
+/// built-in's content, on purpose and in CHANGELOG.md (0.9.0: its rods became the design `paper`'s).
+const METAMATERIAL_ID: &str = "fnv1a64:eb48bf68ae760260";
 
 #[test]
 fn scene_id_is_pinned_and_spelled_once() {
@@ -628,8 +639,8 @@ fn scene_id_depends_only_on_the_values() {
     // The resolved scene's own TOML (another layout again) reads back to the same identity.
     assert_eq!(Scene::from_toml_str(&text, "resolved").unwrap().id(), s.id());
     // And a value change is an identity change.
-    let thicker = original.replacen("thickness_m = 0.0015", "thickness_m = 0.0016", 1);
-    assert_ne!(Scene::from_toml_str(&thicker, "metamaterial.toml").unwrap().id(), s.id());
+    let wider = original.replacen("radius_m = 0.075", "radius_m = 0.076", 1);
+    assert_ne!(Scene::from_toml_str(&wider, "metamaterial.toml").unwrap().id(), s.id());
 }
 
 #[test]

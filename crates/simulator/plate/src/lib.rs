@@ -22,21 +22,19 @@
 //!   better, but the lattice is aligned with the measurement grid (every grid point is a node), assembles in a few
 //!   lines, and is accurate where the recipes look (interior points).
 //! - **Lattice spacing: 2.5 mm** ([`ModelOptions::refinement`] 2, the default, on the 5 mm measurement grid): about
-//!   9 nodes per wavelength at the metamaterial's shortest wavelength in band (2.2 cm at 600 Hz), a 2 % wavelength
-//!   error; 5259 nodes on the built-in plates.
+//!   8.4 nodes per wavelength at the metamaterial's shortest wavelength in the operating band (2.1 cm at 400 Hz), a
+//!   2.3 % wavelength error; 5259 nodes on the built-in plates.
 //! - **Damping and supports:** structural damping `D (1 + i eta)`; the supports are springs `k (1 + i eta_s)` shared
 //!   by the nodes under each pad; lumped mass.
 //! - **Resonators, two homogenised models** (per rod cell, each with its own loss and a per-rod height spread drawn
 //!   from the seed). `added_mass`: a mass on a spring, `mu omega_r^2 / (omega_r^2 - omega^2)`. `rocking_rod`: the
 //!   rod moves with the plate and rocks with its slope, a rotary inertia `J = m r_g^2` entering as a
-//!   Laplacian-shaped mass (the term `-omega^2 div(J grad w)`), resonant at the rod's clamped bending mode. The
-//!   built-in metamaterial uses `rocking_rod`: the paper's mode shapes show "lateral resonator bending", and only
-//!   rocking gives the slow, weakly dispersive branch that makes the pixels small. One parameter is fitted,
-//!   `gyration_radius_m = 0.011` (a rigid rod's `L / sqrt(3)` is 19.3 mm): 10.6 cm at 75 Hz and 2.2 cm at 600 Hz
-//!   (paper: 11.3 and 2.5), 5.0 and 3.4 cm at 250 and 400 Hz. The earlier added-mass fit to the same two points
-//!   (mu = 24, f_r = 650 Hz) matched them exactly but left the operating band's waves at 5.9 and 4.3 cm and the
-//!   pixels at 2.7 x the paper's; more rotary inertia shortens the in-band waves further but takes 600 Hz below
-//!   the measured 2.5 cm by more than 15 %.
+//!   Laplacian-shaped mass (the term `-omega^2 div(J grad w)`), resonant at the rod's clamped bending mode; or, when
+//!   the lattice names a unit-cell design, with the mass, inertia, joint resonance and footprint stiffening of the
+//!   cell's homogenised slow branch ([`design_fit`]). The built-in metamaterial names the design `paper`: the paper's
+//!   mode shapes show "lateral resonator bending", and only rocking gives the slow branch that makes the pixels
+//!   small. From its cell: 10.4 cm at 75 Hz (paper: 11.3), 3.8 and 2.1 cm at 250 and 400 Hz, and no slow wave
+//!   above the branch's top, 552 Hz (the paper measured 2.5 cm at 600 Hz, above its own simulated branch).
 //! - **Solver:** a sparse LU (faer) per frequency bin, with the fill-reducing ordering computed once on the one
 //!   sparsity pattern every matrix shares; one solve per bin gives every actuator's field at every node; bins are
 //!   shared among [`ModelOptions::threads`] threads, and the result does not depend on their number.

@@ -34,20 +34,41 @@ fn local_median(w: &FrequencyWavelengths) -> f64 {
     summary.wavelength_m
 }
 
+/// The built-in metamaterial with its rods given key by key, as 0.8's built-in gave them (rocking rods with their own
+/// mass and clamped bending mode, and an 11 mm radius of gyration), for the models no design's fit goes through.
+fn keyed_metamaterial() -> Scene {
+    let mut scene = Scene::builtin("metamaterial").unwrap();
+    scene.resonators.design = None;
+    scene.resonators.rod_height_m = 0.0334;
+    scene.resonators.gyration_radius_m = Some(0.011);
+    scene.validate().unwrap();
+    scene
+}
+
 #[test]
 fn metamaterial_matches_the_papers_wavelengths_and_is_monotonic() {
+    // The built-in takes its rods from the paper's cell (design `paper`), fitted to nothing the paper measured.
     let scene = Scene::builtin("metamaterial").unwrap();
     let model = PlateModel::from_scene(&scene, &ModelOptions::default()).unwrap();
     let freqs = FREQS_HZ;
-    let lambdas: Vec<f64> = freqs.iter().map(|&f| k_space_median(&scene, &model, f)).collect();
-    // The tolerance: within 15 % of the paper's measured 11.3 cm at 75 Hz and 2.5 cm at 600 Hz.
-    assert!((lambdas[0] / 0.113 - 1.0).abs() < 0.15, "75 Hz: {} m", lambdas[0]);
-    assert!((lambdas[7] / 0.025 - 1.0).abs() < 0.15, "600 Hz: {} m", lambdas[7]);
-    for (w, f) in lambdas.windows(2).zip(freqs.windows(2)) {
+    let measured: Vec<FrequencyWavelengths> = freqs.iter().map(|&f| wavelengths(&scene, &model, f)).collect();
+    let lambdas: Vec<f64> = measured.iter().map(|w| w.k_space_summary.median_m).collect();
+    println!("k-space: {lambdas:?}");
+    // 75 Hz within 15 % of the paper's measured 11.3 cm, on the plate-equation estimate (the k-space peak of a
+    // 10 cm wave on a 24 x 12 cm aperture reads short, as it does on the homogeneous plate).
+    let at_75 = local_median(&measured[0]);
+    assert!((at_75 / 0.113 - 1.0).abs() < 0.15, "75 Hz: {at_75} m");
+    // Monotonic, and 2 to 5 times shorter than the homogeneous plate's A0, from 75 to 300 Hz. From 400 Hz the slow
+    // wave (2.1 cm at 400 Hz) is under 6 steps of this field's 5 mm lattice, outside the plate-equation estimator's
+    // range, and the k-space peak of a single frequency's field is not the slow wave's (it reads 17 cm at 400 Hz);
+    // the band-limited ground truth resolves 400 Hz at 2.09 cm (`wavelength_lattice` in metaplate-analysis).
+    // 600 Hz lies above the cell's slow branch (it tops out at 552 Hz): the plate carries no slow wave there, where
+    // the paper measured 2.5 cm (above its own simulated branch, which tops out at 558 Hz).
+    let in_range = freqs.iter().take_while(|&&f| f <= 300.0).count();
+    for (w, f) in lambdas[..in_range].windows(2).zip(freqs.windows(2)) {
         assert!(w[1] < w[0], "not monotonic between {} and {} Hz: {lambdas:?}", f[0], f[1]);
     }
-    // Shorter than the homogeneous plate's analytic A0 by a factor 2 to 5 across the band.
-    for (&f, &l) in freqs.iter().zip(&lambdas) {
+    for (&f, &l) in freqs.iter().zip(&lambdas).take(in_range) {
         let ratio = scene.plate.a0_wavelength_m(f).unwrap() / l;
         assert!((2.0..=5.0).contains(&ratio), "{f} Hz: A0 / metamaterial = {ratio}");
     }
@@ -145,7 +166,7 @@ fn added_mass_rods_obey_the_homogenised_dispersion() {
     // (`metaplate_plate` resonators docs), so the plate obeys one plate equation with an effective mass and its
     // wavelength is A0's divided by that bracket to the 1/4. The parameters are the added-mass fit to the paper's
     // two measured wavelengths (the built-in scene's before the rocking model replaced it).
-    let mut scene = Scene::builtin("metamaterial").unwrap();
+    let mut scene = keyed_metamaterial();
     scene.resonators.model = metaplate_core::scene::ResonatorModel::AddedMass;
     (scene.resonators.mass_ratio, scene.resonators.resonance_hz) = (Some(24.0), Some(650.0));
     let rods = metaplate_plate::effective_parameters(&scene).unwrap();
@@ -160,7 +181,7 @@ fn rocking_rods_obey_the_homogenised_dispersion() {
     // Rods that move with the plate (mass mu rho h per area) and rock with its slope (rotary inertia
     // J = mu rho h r_g^2 per area, resonant at f_r), homogenised: D k^4 - w^2 J R k^2 - w^2 rho h (1 + mu) = 0 with
     // R = w_r^2 / (w_r^2 - w^2), a quadratic in k^2 whose positive root is the propagating wave.
-    let scene = Scene::builtin("metamaterial").unwrap();
+    let scene = keyed_metamaterial();
     let rods = metaplate_plate::effective_parameters(&scene).unwrap();
     assert_eq!(rods.rigidity_factor, 1.0, "rods given key by key do not stiffen the plate");
     // The plate-equation estimator assumes laplacian^2 w = k^4 w. A plain plate's evanescent companion wave has the
@@ -185,14 +206,14 @@ fn rocking_wavelength_m(scene: &Scene, rods: &metaplate_plate::RodParameters, fr
 
 #[test]
 fn a_plate_built_from_a_design_follows_its_cell() {
-    // The metamaterial's lattice named by the design `paper`: the plate takes the cell's homogenised rocking rod
+    // The built-in metamaterial's lattice is the design `paper`'s: the plate takes the cell's homogenised rocking rod
     // (its mass, its footprints' stiffening under the lattice, the rods' inertia and joint). Where that continuum
     // holds (wavelengths of 4 lattice constants and more: 75 to 300 Hz here; from 400 Hz the slow wave is under 6
     // grid steps, outside the estimator's range), the plate's waves are the fit's, within the same tolerance as the
     // rods given key by key; and so the cell's slow branch, within the fit's error. At 75 Hz that is within 15 % of
     // the paper's measured 11.3 cm.
-    let mut scene = Scene::builtin("metamaterial").unwrap();
-    scene.resonators = scene.resonators.with_design(metaplate_core::design::Design::paper()).unwrap();
+    let scene = Scene::builtin("metamaterial").unwrap();
+    assert_eq!(scene.resonators.design, Some(metaplate_core::design::Design::paper()));
     let rods = metaplate_plate::effective_parameters(&scene).unwrap();
     let fit = metaplate_plate::design_fit(scene.resonators.design.as_ref().unwrap()).unwrap();
     assert!(rods.rigidity_factor > 1.0 && fit.max_relative_error < 0.03, "{rods:?}, {fit:?}");
@@ -207,7 +228,7 @@ fn rocking_rods_slow_waves_more_than_the_same_rods_as_added_mass() {
     // Rocking rods add rotary inertia J = m r_g^2 on top of the rods' mass, a term -w^2 J laplacian(w) that
     // shortens waves further; with the rods' own (derived) parameters both models run, and rocking is shorter.
     use metaplate_core::scene::ResonatorModel;
-    let mut rocking = Scene::builtin("metamaterial").unwrap();
+    let mut rocking = keyed_metamaterial();
     rocking.resonators.gyration_radius_m = None;
     let mut added = rocking.clone();
     added.resonators.model = ResonatorModel::AddedMass;

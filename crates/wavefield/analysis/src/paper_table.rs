@@ -11,6 +11,18 @@ pub const PLATES: [&str; 2] = ["metamaterial", "homogeneous"];
 /// Frequencies of the model's dispersion table, Hz: the paper's two measured points and the band between.
 pub const DISPERSION_FREQS_HZ: [f64; 6] = [75.0, 150.0, 250.0, 400.0, 500.0, 600.0];
 
+/// The plate model's k-space wavelength at one frequency.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModelWavelength {
+    /// Frequency, Hz.
+    pub freq_hz: f64,
+    /// The median over the actuators, m.
+    pub wavelength_m: f64,
+    /// Whether most actuators' estimates lie in the method's resolved range (false: the peak is the aperture's, or
+    /// an alias's, not a wave's).
+    pub resolved: bool,
+}
+
 /// What the suite found on one plate.
 #[derive(Debug, Clone, Copy)]
 pub struct PlateResults<'a> {
@@ -18,8 +30,8 @@ pub struct PlateResults<'a> {
     pub name: &'a str,
     /// The analysis of its scanned dataset.
     pub analysis: Option<&'a DatasetAnalysis>,
-    /// The plate model's k-space wavelength per frequency, `(Hz, m)`, where it was computed (`None`: not run).
-    pub model_wavelengths_m: Option<&'a [(f64, f64)]>,
+    /// The plate model's k-space wavelength per frequency, where it was computed (`None`: not run).
+    pub model_wavelengths: Option<&'a [ModelWavelength]>,
     /// The largest peak velocity at a pixel of a rendered pattern, m/s (`None`: no pattern).
     pub pattern_peak_velocity_m_s: Option<f64>,
 }
@@ -50,7 +62,7 @@ pub fn paper_rows(plates: &[PlateResults<'_>]) -> Vec<PaperRow> {
     let present = present(plates);
     let plate = |name: &str| present.iter().find(|p| p.name == name);
     let disp = |name: &str, f: f64| {
-        plate(name)?.model_wavelengths_m?.iter().find(|(hz, _)| *hz == f).map(|(_, m)| *m).filter(|m| m.is_finite())
+        plate(name)?.model_wavelengths?.iter().find(|w| w.freq_hz == f).filter(|w| w.wavelength_m.is_finite())
     };
     let num = |v: Option<f64>, digits: usize| {
         v.filter(|x| x.is_finite()).map_or_else(|| "-".to_owned(), |x| format!("{x:.digits$}"))
@@ -63,11 +75,26 @@ pub fn paper_rows(plates: &[PlateResults<'_>]) -> Vec<PaperRow> {
     let mut row = |quantity: &str, paper: &str, suite: String| {
         rows.push(PaperRow { quantity: quantity.to_owned(), paper: paper.to_owned(), suite });
     };
-    let cm = |v: Option<f64>| v.map_or_else(|| "-".to_owned(), |m| format!("{:.1} cm", m * 100.0));
+    let cm = |w: Option<&ModelWavelength>| {
+        w.map_or_else(
+            || "-".to_owned(),
+            |w| match w.resolved {
+                true => format!("{:.1} cm", w.wavelength_m * 100.0),
+                false => format!("unresolved ({:.1} cm)", w.wavelength_m * 100.0),
+            },
+        )
+    };
     row("wavelength at 75 Hz, metamaterial (model)", "11.3 cm", cm(disp("metamaterial", 75.0)));
     row("wavelength at 600 Hz, metamaterial (model)", "2.5 cm", cm(disp("metamaterial", 600.0)));
-    let ratios: Vec<f64> =
-        DISPERSION_FREQS_HZ.iter().filter_map(|&f| Some(disp("homogeneous", f)? / disp("metamaterial", f)?)).collect();
+    // Where the metamaterial's wave is resolved; the homogeneous plate's long waves may exceed the aperture (its
+    // k-space reads them short, so the ratio errs low).
+    let ratios: Vec<f64> = DISPERSION_FREQS_HZ
+        .iter()
+        .filter_map(|&f| {
+            let meta = disp("metamaterial", f).filter(|w| w.resolved)?;
+            Some(disp("homogeneous", f)?.wavelength_m / meta.wavelength_m)
+        })
+        .collect();
     let ratio_text = match ratios.iter().copied().reduce(f64::min).zip(ratios.iter().copied().reduce(f64::max)) {
         Some((lo, hi)) => format!("{lo:.1} to {hi:.1}"),
         None => "-".to_owned(),
@@ -125,22 +152,25 @@ mod tests {
 
     #[test]
     fn missing_plates_and_parts_show_as_dashes_and_the_model_rows_use_the_dispersion() {
-        let meta = [(75.0, 0.113), (150.0, 0.08), (250.0, 0.06), (400.0, 0.04), (500.0, 0.03), (600.0, 0.025)];
-        let homo: Vec<(f64, f64)> = meta.iter().map(|&(f, m)| (f, m * 3.0)).collect();
+        let at = |freq_hz: f64, wavelength_m: f64, resolved: bool| ModelWavelength { freq_hz, wavelength_m, resolved };
+        let paper = [(75.0, 0.113), (150.0, 0.08), (250.0, 0.06), (400.0, 0.04), (500.0, 0.03), (600.0, 0.025)];
+        let meta: Vec<ModelWavelength> = paper.iter().map(|&(f, m)| at(f, m, true)).collect();
+        // The homogeneous plate's long waves unresolved at 75 Hz: still in the ratio (its k-space reads them short).
+        let homo: Vec<ModelWavelength> = paper.iter().map(|&(f, m)| at(f, m * 3.0, f > 75.0)).collect();
         let plates = [
             PlateResults {
                 name: "homogeneous",
                 analysis: None,
-                model_wavelengths_m: Some(&homo),
+                model_wavelengths: Some(&homo),
                 pattern_peak_velocity_m_s: Some(0.0123),
             },
             PlateResults {
                 name: "metamaterial",
                 analysis: None,
-                model_wavelengths_m: Some(&meta),
+                model_wavelengths: Some(&meta),
                 pattern_peak_velocity_m_s: None,
             },
-            PlateResults { name: "other", analysis: None, model_wavelengths_m: None, pattern_peak_velocity_m_s: None },
+            PlateResults { name: "other", analysis: None, model_wavelengths: None, pattern_peak_velocity_m_s: None },
         ];
         assert_eq!(columns(&plates), "metamaterial / homogeneous");
         let rows = paper_rows(&plates);
@@ -152,5 +182,18 @@ mod tests {
         assert_eq!(rows[6].suite, "- / - [- pts, NaN cm]");
         assert_eq!(rows[10].suite, "- / 12.3");
         assert_eq!(paper_rows(&[]).iter().filter(|r| r.suite == "-").count(), 3);
+
+        // The metamaterial's 600 Hz estimate unresolved (no wave: the peak is the aperture's): said so, and left out
+        // of the ratio, whose range is then the resolved frequencies'.
+        let mut above = meta.clone();
+        above[5] = at(600.0, 0.229, false);
+        above[4].wavelength_m = 0.015;
+        let plates = [
+            PlateResults { model_wavelengths: Some(&above), ..plates[1] },
+            PlateResults { model_wavelengths: Some(&homo), ..plates[0] },
+        ];
+        let rows = paper_rows(&plates);
+        assert_eq!(rows[1].suite, "unresolved (22.9 cm)");
+        assert_eq!(rows[2].suite, "3.0 to 6.0");
     }
 }
