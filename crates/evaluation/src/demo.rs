@@ -41,8 +41,9 @@ use crate::report::{ReportPlate, ScanMeasurement, analyse_with_figures, write_re
 use crate::simulated::{DispersionReport, model_dispersion};
 use crate::truth::{GreensErrorSummary, greens_errors};
 
-/// The default scan grid: every other point of the paper's 49 x 25 (1 cm spacing: 4 points per wavelength at
-/// 600 Hz; the 3.5 x 3.5 cm authority domain, centred on the lattice point at the plate centre, holds 3 x 3 points).
+/// The default scan grid: every other point of the paper's 49 x 25 (1 cm spacing: 2 points per wavelength at
+/// 400 Hz on the metamaterial, the lattice's limit; the 3.5 x 3.5 cm authority domain, centred on the lattice point
+/// at the plate centre, holds 3 x 3 points).
 const DEFAULT_GRID: (usize, usize) = (25, 13);
 
 /// The pattern: positions as fractions of the measured area (-1..1 each way) and targets (`metaplate focus`

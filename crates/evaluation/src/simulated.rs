@@ -299,3 +299,32 @@ fn records(scene: &Scene, greens: &GreensFunctions, point_ks: &[usize]) -> Resul
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frequency is resolved while at most half the actuators' estimates are flagged.
+    #[test]
+    fn a_model_wavelength_is_resolved_while_at_most_half_the_actuators_are_flagged() {
+        let point = |freq_hz: f64, actuators_flagged: usize| DispersionPoint {
+            a0_over_wavelength: 2.0,
+            a0_wavelength_m: 0.2,
+            actuators_flagged,
+            freq_hz,
+            iqr_m: [0.09, 0.11],
+            local_wavelength_m: Some(0.1),
+            per_actuator_m: vec![0.1; 8],
+            wavelength_m: 0.1,
+        };
+        let report = DispersionReport {
+            method: "k-space",
+            points: vec![point(75.0, 0), point(400.0, 4), point(600.0, 5)],
+            scene: "s".into(),
+            scene_hash: "h".into(),
+        };
+        let resolved: Vec<(f64, bool)> = report.model_wavelengths().iter().map(|w| (w.freq_hz, w.resolved)).collect();
+        assert_eq!(resolved, [(75.0, true), (400.0, true), (600.0, false)]);
+        assert!(report.model_wavelengths().iter().all(|w| w.wavelength_m == 0.1));
+    }
+}

@@ -639,6 +639,7 @@ fn scene_id_depends_only_on_the_values() {
     // The resolved scene's own TOML (another layout again) reads back to the same identity.
     assert_eq!(Scene::from_toml_str(&text, "resolved").unwrap().id(), s.id());
     // And a value change is an identity change.
+    // (The plate's outline: its thickness must stay the design's.)
     let wider = original.replacen("radius_m = 0.075", "radius_m = 0.076", 1);
     assert_ne!(Scene::from_toml_str(&wider, "metamaterial.toml").unwrap().id(), s.id());
 }

@@ -61,7 +61,7 @@
 //!
 //! Under refinement (metamaterial, actuator 0, k-space median wavelength;
 //! `cargo bench -p metaplate-plate --bench greens_bench -- convergence`; measured on the earlier added-mass scene,
-//! not yet re-measured on the rocking-rod one):
+//! not yet re-measured on the plate built from the design `paper`):
 //!
 //! | lattice h | 75 Hz | 300 Hz | 600 Hz |
 //! |---|---|---|---|

@@ -32,9 +32,9 @@ fn median<'a>(pixels: impl Iterator<Item = (&'a Option<f64>, &'a PixelOutcome)>)
 }
 
 #[test]
-// Measured on the compensated ground truth: metamaterial 4.94 cm^2 (47 % flagged), homogeneous 36.7 cm^2 (7.4 x),
-// time reversal 5.38 cm^2. The metamaterial is 1.8 x the paper's: the plate model is held to the paper's measured
-// wavelengths at 75 and 600 Hz, and the 600 Hz one bounds how slow its in-band waves can be (the scene's comments).
+// Measured on the compensated ground truth: metamaterial 2.53 cm^2 (45 % flagged: pixels reaching the edge),
+// homogeneous 36.8 cm^2 (14.6 x), time reversal 4.99 cm^2 (1.97 x the inverse filter's). The metamaterial is the
+// plate built from the paper's cell, fitted to nothing the paper measured: 8 % under the paper's 2.74 cm^2.
 fn metamaterial_pixels_are_small_and_homogeneous_ones_large() {
     let options = PixelAreaOptions::default();
     let (meta_scene, meta_g) = ground_truth("metamaterial");
@@ -73,7 +73,8 @@ fn metamaterial_pixels_are_small_and_homogeneous_ones_large() {
     assert!(homo_median >= 5.0 * meta_median, "homogeneous {homo_median} vs metamaterial {meta_median} cm^2");
     // Most metamaterial pixels must close inside the plate (the paper maps the whole display).
     assert!(meta.flagged_fraction() < 0.5, "{:.2} of metamaterial pixels flagged", meta.flagged_fraction());
-    // Time reversal gives similar areas on the metamaterial plate (paper, Fig. S5): within a factor 2.
+    // Time reversal gives similar areas on the metamaterial plate (paper, Fig. S5): within a factor 2 (1.97
+    // measured; why it is not "slightly larger" here: the next test).
     let tr = PixelAreaOptions { method: Method::TimeReversal, ..options };
     let tr_median =
         pixel_area_map(&meta_g, &meta_scene.grid, &meta_scene.grid_mask(), &tr).unwrap().median_area_cm2().unwrap();
@@ -84,8 +85,7 @@ fn metamaterial_pixels_are_small_and_homogeneous_ones_large() {
 /// What compensation changes, and the band: inverse filtering solves per bin, so a per-actuator gain (the
 /// compensation) only rescales its solution and leaves the field alone; time reversal weighs each bin by |G|^2, so
 /// without compensation the strong low frequencies dominate and its pixels grow. The paper's time-reversal pixels
-/// are "on average slightly larger" than the inverse filter's (Fig. S5): larger on the compensated ground truth, and
-/// compensation takes them most of the way there.
+/// are "on average slightly larger" than the inverse filter's (Fig. S5): here 1.97 x compensated, 3.67 x without.
 #[test]
 fn compensation_matters_to_time_reversal_only_and_the_map_uses_the_operating_band() {
     let truth = GroundTruth::builtin("metamaterial", &GroundTruthOptions::default(), Some(&cache())).unwrap();
@@ -104,11 +104,12 @@ fn compensation_matters_to_time_reversal_only_and_the_map_uses_the_operating_ban
     eprintln!("inverse filter {inv:.2} cm^2 ({inv_raw:.2} uncompensated), time reversal {tr:.2} ({tr_raw:.2})");
     // Only the regularisation (relative to sigma_max per bin) sees the per-actuator gains: within 5 %.
     assert!((inv / inv_raw - 1.0).abs() < 0.05, "inverse filter {inv} vs {inv_raw} uncompensated");
-    // Larger than the inverse filter's when compensated, and without compensation larger again by more than 1.5 x:
-    // the strong low frequencies then set the pixel. (On the plate built from the paper's cell, time reversal's
-    // compensated pixels are about twice the inverse filter's, not "slightly larger": its waves shorten from 10 to
-    // 2 cm over the band, so the weight time reversal gives the strong bins counts for more; docs/results-paper.md.)
-    assert!(tr / inv > 1.0, "time reversal {tr} vs inverse filter {inv}");
+    // Larger than the inverse filter's when compensated but within 2 x, and without compensation larger again by
+    // more than 1.5 x: the strong low frequencies then set the pixel. (On the plate built from the paper's cell,
+    // time reversal's compensated pixels are about twice the inverse filter's, not "slightly larger": its waves
+    // shorten 4.5-fold over the band, so the |G|^2 weight on the strong low bins likely counts for more;
+    // docs/results-paper.md.)
+    assert!((1.0..2.0).contains(&(tr / inv)), "time reversal {tr} vs inverse filter {inv}");
     assert!(
         (tr_raw / inv_raw) / (tr / inv) > 1.5,
         "uncompensated time reversal {tr_raw} vs {inv_raw}, compensated {tr}"

@@ -122,8 +122,8 @@ fn metamaterial_subsets_agree_with_the_full_grid_or_are_flagged() {
     for (stride, at) in &lattices {
         for (w, f) in at.iter().zip(full) {
             if w.in_range {
-                // Measured: within 2 % (every second and third point at 400 Hz, which their lattices alias, and
-                // every lattice at 600 Hz, above the slow branch, are flagged).
+                // Measured: within 2 % (every second and third point at 400 Hz, at and beyond their lattices'
+                // limits, and every lattice at 600 Hz, above the slow branch, are flagged).
                 assert_agrees_with_full_grid(*stride, w, f);
             }
         }
@@ -131,10 +131,13 @@ fn metamaterial_subsets_agree_with_the_full_grid_or_are_flagged() {
     let at = |stride: usize, freq_hz: f64| {
         lattices[stride - 1].1.iter().find(|w| (w.freq_hz - freq_hz).abs() < 2.0).unwrap()
     };
-    // 400 Hz: about 2.1 cm (the plate's homogenised cell, `dispersion` tests of metaplate-plate), shorter than the
-    // 3 cm Nyquist wavelength of every third point (1.5 cm): that lattice aliases it and must say so.
+    // 400 Hz: 2.14 cm by the plate's own plate equation (the homogenised cell, `dispersion` tests of
+    // metaplate-plate), shorter than the 3 cm Nyquist wavelength of every third point (1.5 cm): that lattice aliases
+    // it and must say so; every second point's (2 cm) has it at its limit and says so too. The full grid reads it
+    // within 5 % (measured 2.09 cm, 2 % short: the k-space peak of a 4-step wave on the 5 mm grid).
     assert!(!at(3, 400.0).in_range, "{:?}", at(3, 400.0));
-    assert!((median_m(at(1, 400.0)) / 0.021 - 1.0).abs() < 0.15, "{:?}", at(1, 400.0));
+    assert!(!at(2, 400.0).in_range, "{:?}", at(2, 400.0));
+    assert!((median_m(at(1, 400.0)) / 0.0214 - 1.0).abs() < 0.05, "{:?}", at(1, 400.0));
     // 600 Hz lies above the cell's slow branch (it tops out at 552 Hz): no lattice resolves a wave there, and each
     // says so.
     for stride in 1..=3 {

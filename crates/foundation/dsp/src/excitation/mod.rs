@@ -530,8 +530,8 @@ impl Decoder {
 
 /// Samples of a scan's responses before time 0 (85 ms at 24 kHz), the rest of the 12000 after it: the band limit
 /// smears a response's abrupt onset into negative time, and a response cut at time 0 misses that precursor, a bias
-/// of -38 dB median over 80..600 Hz on the built-in plates with every imperfection of the mock lab off (`metaplate
-/// budget --pre-samples 0`); kept, the processing floor is -89 dB. The response after time 0 (0.415 s) still holds
+/// of -38 dB median over 80..600 Hz on 0.8's built-in plates with every imperfection of the mock lab off
+/// (`metaplate budget --pre-samples 0`); kept, the processing floor is -89 dB. The response after time 0 (0.415 s) still holds
 /// the plates' ring-down to below -100 dB.
 pub const PRE_SAMPLES: usize = 2048;
 /// Regularisation of a scan's linear sweeps: its bias `eps / (|D|^2 + eps)`, at most 6e-5 where the sweep's power
