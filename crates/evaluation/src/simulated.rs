@@ -57,14 +57,15 @@ pub struct DispersionPoint {
 }
 
 impl DispersionReport {
-    /// The k-space wavelength per frequency, resolved where at most half the actuators' estimates are flagged.
+    /// The k-space wavelength per frequency, resolved where no actuator's estimate is flagged (the rule by which
+    /// [`metaplate_analysis::report::wavelength_at`] judges a dataset's).
     pub fn model_wavelengths(&self) -> Vec<ModelWavelength> {
         self.points
             .iter()
             .map(|p| ModelWavelength {
                 freq_hz: p.freq_hz,
                 wavelength_m: p.wavelength_m,
-                resolved: 2 * p.actuators_flagged <= p.per_actuator_m.len(),
+                resolved: p.actuators_flagged == 0,
             })
             .collect()
     }
@@ -304,9 +305,9 @@ fn records(scene: &Scene, greens: &GreensFunctions, point_ks: &[usize]) -> Resul
 mod tests {
     use super::*;
 
-    /// A frequency is resolved while at most half the actuators' estimates are flagged.
+    /// A frequency is resolved while no actuator's estimate is flagged.
     #[test]
-    fn a_model_wavelength_is_resolved_while_at_most_half_the_actuators_are_flagged() {
+    fn a_model_wavelength_is_resolved_while_no_actuator_is_flagged() {
         let point = |freq_hz: f64, actuators_flagged: usize| DispersionPoint {
             a0_over_wavelength: 2.0,
             a0_wavelength_m: 0.2,
@@ -319,12 +320,12 @@ mod tests {
         };
         let report = DispersionReport {
             method: "k-space",
-            points: vec![point(75.0, 0), point(400.0, 4), point(600.0, 5)],
+            points: vec![point(75.0, 0), point(375.0, 1), point(600.0, 8)],
             scene: "s".into(),
             scene_hash: "h".into(),
         };
         let resolved: Vec<(f64, bool)> = report.model_wavelengths().iter().map(|w| (w.freq_hz, w.resolved)).collect();
-        assert_eq!(resolved, [(75.0, true), (400.0, true), (600.0, false)]);
+        assert_eq!(resolved, [(75.0, true), (375.0, false), (600.0, false)]);
         assert!(report.model_wavelengths().iter().all(|w| w.wavelength_m == 0.1));
     }
 }

@@ -18,7 +18,7 @@ pub struct ModelWavelength {
     pub freq_hz: f64,
     /// The median over the actuators, m.
     pub wavelength_m: f64,
-    /// Whether at least half the actuators' estimates lie in the method's resolved range (false: the peak is the
+    /// Whether every actuator's estimate lies in the method's resolved range (false: for some, the peak is the
     /// aperture's, or an alias's, not a wave's).
     pub resolved: bool,
 }

@@ -242,12 +242,21 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) 
         };
         match &s.look {
             Look::Measured(in_range) => {
+                let filled = |i: usize| in_range.get(i).copied().unwrap_or(true);
+                // Solid between points both in range; thin and dashed where either lies outside it, so that a jump to
+                // an aperture's or an alias's reading is not drawn as the wave's.
+                let (solid, outside): (Vec<_>, Vec<_>) =
+                    pts.windows(2).enumerate().partition(|(i, _)| filled(*i) && filled(*i + 1));
                 chart
-                    .draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))
+                    .draw_series(solid.iter().map(|(_, pair)| PathElement::new(pair.to_vec(), colour.stroke_width(2))))
                     .map_err(|e| e.to_string())?
                     .label(s.label.clone())
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
-                let filled = |i: usize| in_range.get(i).copied().unwrap_or(true);
+                for (_, pair) in &outside {
+                    chart
+                        .draw_series(DashedLineSeries::new(pair.iter().copied(), 4, 4, colour.stroke_width(1)))
+                        .map_err(|e| e.to_string())?;
+                }
                 chart
                     .draw_series(pts.iter().enumerate().map(|(i, &p)| {
                         let style = if filled(i) { colour.filled() } else { WHITE.filled() };
