@@ -1,5 +1,5 @@
-//! `metaplate export` and `metaplate import` on a small ground-truth dataset (13 x 7 points of the metamaterial
-//! plate, 8 actuators): the round trip dataset -> universal file -> dataset in every format (ASCII and binary,
+//! `metaplate export` and `metaplate import` on small ground-truth datasets (13 x 7 and 4 x 3 points of the
+//! metamaterial plate, 8 actuators): the round trip dataset -> universal file -> dataset in every format (ASCII and binary,
 //! single and double precision, both byte orders, time responses and complex FRFs), and `analyze` on the import
 //! equal to `analyze` on the original.
 
@@ -24,20 +24,26 @@ fn ok(args: &[&str]) -> Output {
 /// target directory, as the other command tests do, so a second process loads them).
 fn original() -> &'static Path {
     static DATA: OnceLock<PathBuf> = OnceLock::new();
-    DATA.get_or_init(|| {
-        let data = common::scratch("uff-cli", "original").join("gt");
-        let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
-        std::fs::create_dir_all(&cache).unwrap();
-        let (d, c) = (data.to_str().unwrap(), cache.to_str().unwrap());
-        // The mock lab's band: cut from the lab's cache entry for this plate (tests/analyze.rs).
-        let band = ["--band-lo-hz", "40", "--band-hi-hz", "800"];
-        ok(&[
-            &["simulate", "greens", "--scene", "metamaterial", "--grid", "13x7", "--out", d, "--cache-dir", c][..],
-            &band,
-        ]
+    DATA.get_or_init(|| ground_truth("original", "13x7"))
+}
+
+/// The same plate on a 4 x 3 grid (96 responses): what the round trip through each format needs (every record
+/// type, precision and byte order), at an eighth of the original's size, so six formats take seconds, not a minute.
+fn few_points() -> &'static Path {
+    static DATA: OnceLock<PathBuf> = OnceLock::new();
+    DATA.get_or_init(|| ground_truth("few-points", "4x3"))
+}
+
+fn ground_truth(name: &str, grid: &str) -> PathBuf {
+    let data = common::scratch("uff-cli", name).join("gt");
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
+    std::fs::create_dir_all(&cache).unwrap();
+    let (d, c) = (data.to_str().unwrap(), cache.to_str().unwrap());
+    // The mock lab's band: cut from the lab's cache entry for this plate (tests/analyze.rs).
+    let band = ["--band-lo-hz", "40", "--band-hi-hz", "800"];
+    ok(&[&["simulate", "greens", "--scene", "metamaterial", "--grid", grid, "--out", d, "--cache-dir", c][..], &band]
         .concat());
-        data
-    })
+    data
 }
 
 /// Asserts that every response of `imported` is the original's within `rel` of the response's peak (and that
@@ -60,7 +66,7 @@ fn assert_same_responses(original: &Dataset, imported: &Dataset, rel: f64, what:
 
 #[test]
 fn round_trip_in_every_format_reproduces_every_response() {
-    let original_path = original();
+    let original_path = few_points();
     let original = Dataset::open(original_path).unwrap();
     let dir = common::scratch("uff-cli", "round-trip");
     // (format, precision, byte order, bound on the error relative to a response's peak): ASCII single writes 6
@@ -104,6 +110,8 @@ fn round_trip_in_every_format_reproduces_every_response() {
 
     // The grid from the nodes alone: the 13 x 7 subset of the 5 mm grid placed on a 5 mm grid again, every
     // response at its position.
+    let original_path = self::original();
+    let original = Dataset::open(original_path).unwrap();
     let file = dir.join("nodes.uff");
     ok(&["export", "--data", original_path.to_str().unwrap(), "--format", "uff58b", "--out", file.to_str().unwrap()]);
     let back = dir.join("nodes");

@@ -227,7 +227,7 @@ pub enum StoreError {
         /// Actuator number.
         actuator: u16,
     },
-    /// Polars refused to scan the dataset (feature `polars`).
+    /// Polars refused to read the dataset's files (feature `polars`).
     #[cfg(feature = "polars")]
     #[error("{dir}: polars: {reason}")]
     Polars {

@@ -51,7 +51,7 @@
 //!   committed file at a time; [`Dataset::committed_keys`] reads the journal alone; [`Dataset::read_batch`] reads
 //!   one committed file, verified against its journal entry (with [`journal::view`], how a follower reads a dataset
 //!   as it grows). [`Dataset::committed_files`] lists the committed files for other readers; with the cargo
-//!   feature `polars`, `Dataset::lazy` gives a polars `LazyFrame` over them.
+//!   feature `polars`, `Dataset::dataframe` reads them into a polars `DataFrame`.
 //! - [`wav`]: [`export_wav`] and [`write_wav_f32`] write 32-bit float multichannel WAV files (impulse responses,
 //!   drive signals); [`read_wav`] reads any WAV file.
 //! - [`write_bytes`]: a small file written durably outside a dataset (an experiment session's plan, for example).
@@ -73,12 +73,12 @@ mod checksum;
 mod codec;
 mod committed;
 mod compact;
+#[cfg(feature = "polars")]
+mod dataframe;
 mod durable;
 pub mod error;
 mod index;
 pub mod journal;
-#[cfg(feature = "polars")]
-mod lazy;
 pub mod lock;
 pub mod manifest;
 mod reader;

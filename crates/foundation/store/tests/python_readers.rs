@@ -132,21 +132,28 @@ fn the_committed_files_are_the_journaled_ones() {
     assert!(matches!(Dataset::committed_files(empty.path()), Err(metaplate_store::StoreError::EmptyDataset { .. })));
 }
 
-/// `Dataset::lazy` scans exactly the committed files, in the dataset's columns.
+/// `Dataset::dataframe` reads exactly the committed files, in the dataset's columns, and only the columns asked for.
 #[cfg(feature = "polars")]
 #[test]
-fn the_polars_lazy_frame_reads_the_committed_rows() {
-    use polars::prelude::{DataType, col, lit};
+fn the_polars_dataframe_holds_the_committed_rows() {
+    use polars_core::prelude::{ChunkCompareEq, DataType};
     let dir = two_batches_and_an_orphan();
-    let frame = Dataset::lazy(dir.path()).unwrap().collect().unwrap();
+    let frame = Dataset::dataframe(dir.path(), None).unwrap();
+    // Two committed batches of three rows; the orphan batch's rows are not read.
     assert_eq!(frame.height(), 6);
     let schema = frame.schema();
     assert_eq!(schema.get("point_index"), Some(&DataType::UInt32));
+    assert_eq!(schema.get("actuator"), Some(&DataType::UInt16));
     assert_eq!(schema.get("ir"), Some(&DataType::Array(Box::new(DataType::Float32), 50)));
-    let one = Dataset::lazy(dir.path())
-        .unwrap()
-        .filter(col("point_index").eq(lit(6u32)).and(col("actuator").eq(lit(3u16))))
-        .collect()
-        .unwrap();
+    assert!(matches!(schema.get("measured_at"), Some(DataType::Datetime(..))), "{:?}", schema.get("measured_at"));
+    let point = frame.column("point_index").unwrap().u32().unwrap();
+    let actuator = frame.column("actuator").unwrap().u16().unwrap();
+    let one = frame.filter(&(point.equal(6) & actuator.equal(3))).unwrap();
     assert_eq!(one.height(), 1);
+
+    let small = Dataset::dataframe(dir.path(), Some(&["actuator", "point_index"])).unwrap();
+    assert_eq!(small.get_column_names(), ["actuator", "point_index"]);
+    assert_eq!(small.height(), 6);
+    let unknown = Dataset::dataframe(dir.path(), Some(&["no_such_column"])).unwrap_err();
+    assert!(matches!(unknown, metaplate_store::StoreError::Polars { .. }), "{unknown}");
 }
