@@ -7,6 +7,11 @@
 //! `S24_3LE`, `S16_LE`. A DAQ channel's `input` is the interface's input (channel of the PCM, from 0). An interface's
 //! inputs have one range: the voltage at digital full scale, declared in the hardware file (`full_scale_v`, from the
 //! interface's manual, e.g. +/-1.74 V for +4 dBu line inputs at 0 dB gain); a channel must ask exactly that range.
+//!
+//! The channel map: the positions the PCM reports for its channels once open (`snd_pcm_get_chmap`, ALSA's short
+//! names: `FL FR`, `AUX0 AUX1 ...`; many interfaces report none) are added to the identity's model once the stream
+//! is open; a hardware file that names the map it expects ([`AlsaCaptureDaq::expect_channel_map`]) has any other
+//! PCM refused when the stream opens, naming both (another interface behind the name, or a routing changed).
 
 use alsa::Direction;
 use alsa::pcm::PCM;
@@ -33,6 +38,7 @@ struct Stream {
 pub struct AlsaCaptureDaq {
     name: String,
     full_scale_v: f64,
+    expected_channel_map: Option<Vec<String>>,
     identity: DaqIdentity,
     stream: Option<Stream>,
     config: Option<DaqConfig>,
@@ -54,12 +60,20 @@ impl AlsaCaptureDaq {
         Self {
             name: pcm_name.into(),
             full_scale_v,
+            expected_channel_map: None,
             identity,
             stream: None,
             config: None,
             running: false,
             next_sample_index: 0,
         }
+    }
+
+    /// Refuses to configure unless the PCM reports exactly this channel map: one ALSA short name per channel, in
+    /// channel order (`["FL", "FR"]`; case ignored). Without it any map, or none, is taken.
+    pub fn expect_channel_map(mut self, positions: Vec<String>) -> Self {
+        self.expected_channel_map = Some(positions.iter().map(|p| p.trim().to_ascii_uppercase()).collect());
+        self
     }
 
     /// The sample format the open stream reads, if open.
@@ -112,6 +126,35 @@ impl AlsaCaptureDaq {
                 detail: format!("{}: has {} inputs, input {highest} asked", self.name, opened.channels),
             });
         }
+        let reported = channel_map(&pcm);
+        if let Some(expected) = &self.expected_channel_map {
+            let name = &self.name;
+            let expected_text = expected.join(" ");
+            match &reported {
+                None => {
+                    return Err(DaqError::Config {
+                        detail: format!(
+                            "{name}: reports no channel map; the hardware file expects `{expected_text}` \
+                             (`daq.channel_map`)"
+                        ),
+                    });
+                }
+                Some(map) if map != expected => {
+                    return Err(DaqError::Config {
+                        detail: format!(
+                            "{name}: its channel map is `{}`; the hardware file expects `{expected_text}` \
+                             (`daq.channel_map`): another interface behind this name, or its routing changed",
+                            map.join(" ")
+                        ),
+                    });
+                }
+                Some(_) => {}
+            }
+        }
+        self.identity.model = match &reported {
+            Some(map) => format!("capture PCM {} (channel map {})", self.name, map.join(" ")),
+            None => format!("capture PCM {}", self.name),
+        };
         self.stream = Some(Stream { pcm, format, channels: opened.channels as usize });
         Ok(())
     }
@@ -236,6 +279,18 @@ impl Daq for AlsaCaptureDaq {
             None => Ok(()),
         }
     }
+}
+
+/// The channel positions `pcm` reports once open, ALSA's short names in channel order; `None` when it reports none
+/// (many interfaces and plugins) or the map cannot be printed.
+fn channel_map(pcm: &PCM) -> Option<Vec<String>> {
+    use std::fmt::Write as _;
+    let map = pcm.get_chmap().ok()?;
+    // Through `write!`, not `to_string`: the crate's `Display` fails (rather than prints) a map ALSA cannot print.
+    let mut text = String::new();
+    write!(text, "{map}").ok()?;
+    let positions: Vec<String> = text.split_whitespace().map(str::to_owned).collect();
+    (!positions.is_empty()).then_some(positions)
 }
 
 /// A PCM error as the DAQ capability's.

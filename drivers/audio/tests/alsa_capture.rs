@@ -41,8 +41,10 @@ fn the_interfaces_inputs_are_read_as_volts_through_libasound() {
     std::fs::write(
         &config,
         format!(
-            "</usr/share/alsa/alsa.conf>\npcm.{PCM} {{\n type file\n slave.pcm \"null\"\n file \"/dev/null\"\n \
-             infile \"{}\"\n format \"raw\"\n}}\n",
+            // The null PCM reports the channel map its `chmap` gives (alsa-lib's pcm_null.c), through the file
+            // plugin, as an interface's driver would report its inputs' positions.
+            "</usr/share/alsa/alsa.conf>\npcm.{PCM} {{\n type file\n slave.pcm {{ type null chmap [ \"FL,FR,FC\" ] }}\n \
+             file \"/dev/null\"\n infile \"{}\"\n format \"raw\"\n}}\n",
             infile.display()
         ),
     )
@@ -65,12 +67,24 @@ fn the_interfaces_inputs_are_read_as_volts_through_libasound() {
 #[ignore = "run by the_interfaces_inputs_are_read_as_volts_through_libasound, which defines its PCM"]
 fn capture_from_the_written_pcm() {
     let _dir: PathBuf = std::env::var_os("METAPLATE_CAPTURE_TEST_DIR").expect("run by its parent test").into();
-    let mut daq = AlsaCaptureDaq::new(PCM, FULL_SCALE_V);
+    let daq = AlsaCaptureDaq::new(PCM, FULL_SCALE_V);
     // Inputs 2 and 0, in that order, in blocks of 1000.
     let channel = |input| DaqChannel { input, range_v: FULL_SCALE_V };
     let config =
         DaqConfig { channels: vec![channel(2), channel(0)], sample_rate_hz: RATE_HZ, block_len_samples: 1_000 };
+    // A hardware file expecting another map has the PCM refused, naming both maps; the right one (any case) opens.
+    let mut elsewhere = AlsaCaptureDaq::new(PCM, FULL_SCALE_V).expect_channel_map(vec!["FL".into(), "FR".into()]);
+    let err = elsewhere.configure(&config).unwrap_err();
+    let text = err.to_string();
+    assert!(
+        matches!(err, DaqError::Config { .. }) && text.contains("`FL FR FC`") && text.contains("`FL FR`"),
+        "{text}"
+    );
+    drop(elsewhere);
+    let mut daq = daq.expect_channel_map(vec!["fl".into(), "fr".into(), "fc".into()]);
     daq.configure(&config).unwrap();
+    // Once open, the identity names the channels.
+    assert_eq!(daq.identity().model, format!("capture PCM {PCM} (channel map FL FR FC)"));
     assert_eq!(daq.sample_format(), Some(metaplate_audio::SampleFormat::F32));
     daq.start().unwrap();
     let expected = signal();

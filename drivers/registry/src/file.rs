@@ -177,6 +177,10 @@ pub struct AlsaDaq {
     /// The inputs' voltage at digital full scale, V (from the interface's manual at the gain in use; for example
     /// 1.74 for +4 dBu line inputs at 0 dB): `wiring.daq_range_v` must be this.
     pub full_scale_v: f64,
+    /// The channel map the PCM must report, one ALSA short name per channel (`["FL", "FR"]`, `["AUX0", "AUX1"]`):
+    /// any other, or none, is refused when a run opens the stream, the error naming what it reports. Default: any
+    /// map, or none.
+    pub channel_map: Option<Vec<String>>,
 }
 
 /// `[daq]` with `backend = "labjack-u6"`.
@@ -430,6 +434,13 @@ impl HardwareFile {
                 ni.settings(path).map_err(|(key, reason)| bad(&key, reason))?;
             }
             DaqSection::Alsa(alsa) => {
+                if let Some(map) = &alsa.channel_map {
+                    let bad_position = map.iter().find(|p| p.trim().is_empty() || !p.trim().is_ascii());
+                    if map.is_empty() || bad_position.is_some() {
+                        let detail = format!("{map:?} is not a list of ALSA channel positions (`[\"FL\", \"FR\"]`)");
+                        return Err(bad("daq.channel_map", detail));
+                    }
+                }
                 let full_scale_v = alsa.full_scale_v;
                 if !(full_scale_v.is_finite() && full_scale_v > 0.0) {
                     return Err(bad("daq.full_scale_v", format!("{full_scale_v} V is not a voltage above 0")));

@@ -159,7 +159,11 @@ fn open_daq(section: &DaqSection, file_path: &Path) -> Result<Box<dyn metaplate_
             // Opened when the recipe configures it (rate, inputs), as ALSA opens a stream.
             #[cfg(all(feature = "alsa", target_os = "linux"))]
             {
-                Ok(Box::new(metaplate_audio::AlsaCaptureDaq::new(&alsa.device, alsa.full_scale_v)))
+                let daq = metaplate_audio::AlsaCaptureDaq::new(&alsa.device, alsa.full_scale_v);
+                Ok(Box::new(match &alsa.channel_map {
+                    Some(map) => daq.expect_channel_map(map.clone()),
+                    None => daq,
+                }))
             }
             #[cfg(not(all(feature = "alsa", target_os = "linux")))]
             Err(not_built(Capability::Daq, "alsa", &alsa.device))

@@ -69,6 +69,21 @@ fn the_audio_interfaces_inputs_are_selectable_as_the_daq() {
     let DaqSection::Alsa(alsa) = &file.daq else { panic!("{:?}", file.daq) };
     assert_eq!((alsa.device.as_str(), alsa.full_scale_v), ("hw:CARD=24Ao,DEV=0", range_v));
     assert_eq!(file.backends()[1], (Capability::Daq, "alsa"));
+    assert_eq!(alsa.channel_map, None);
+    let with_map = parse(&with_daq(&format!(
+        "[daq]\nbackend = \"alsa\"\ndevice = \"hw:0\"\nfull_scale_v = {range_v:?}\nchannel_map = [\"AUX0\", \"AUX1\"]\n"
+    )))
+    .unwrap();
+    let DaqSection::Alsa(alsa) = &with_map.daq else { panic!("{:?}", with_map.daq) };
+    assert_eq!(alsa.channel_map.as_deref(), Some(&["AUX0".to_owned(), "AUX1".to_owned()][..]));
+    let full_scale = format!("full_scale_v = {range_v:?}\n");
+    for (daq, key) in [
+        (format!("device = \"hw:0\"\n{full_scale}channel_map = []\n"), "daq.channel_map"),
+        (format!("device = \"hw:0\"\n{full_scale}channel_map = [\"FL\", \" \"]\n"), "daq.channel_map"),
+    ] {
+        let err = parse(&with_daq(&format!("[daq]\nbackend = \"alsa\"\n{daq}"))).unwrap_err();
+        assert!(matches!(&err, HardwareError::File { key: k, .. } if k.starts_with(key)), "{daq}: {err}");
+    }
     for (daq, key) in [
         ("device = \"hw:0\"\nfull_scale_v = -1.0\n", "daq.full_scale_v"),
         ("device = \"hw:0\"\nfull_scale_v = 1.737\n", "wiring.daq_range_v"),
