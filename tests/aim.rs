@@ -1,6 +1,7 @@
 //! `metaplate aim teach` on the mock lab's mirrors, through the binary: a simulated user's key bytes (the lab's
 //! `teacher`, computed in-process on the same seeded mirrors) piped to the command, the fit it writes read back, and
-//! a 7 x 5 scan aimed through it landing within 0.3 mm of every target.
+//! a 7 x 5 scan aimed through it landing within 0.3 mm of every target, and `scan --galvo-fit` aiming the mock lab
+//! through it.
 
 use std::io::Write as _;
 use std::process::{Command, Stdio};
@@ -69,5 +70,23 @@ fn aim_teach_on_the_mock_galvo_with_scripted_keys_lands_a_7_by_5_scan_within_0_3
         worst_m = worst_m.max((bx - x_m).hypot(by - y_m));
     }
     assert!(worst_m < 0.3e-3, "worst landing {:.3} mm off", worst_m * 1e3);
+
+    // A mock-lab scan aimed through the taught fit (the recipes' tests measure its error against the truth): the
+    // dataset's rig record names the fit; without --scene the option is refused.
+    let scan_dir = dir.join("scan");
+    let (f, s) = (fit_path.to_str().unwrap(), scan_dir.to_str().unwrap());
+    let scan = ["scan", "--scene", "metamaterial", "--protocol", "quick", "--grid", "2x1", "--uncalibrated"];
+    let out = crate::common::metaplate(&[&scan[..], &["--galvo-fit", f, "--out", s]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let manifest = std::fs::read_to_string(scan_dir.join("manifest.json")).unwrap();
+    assert!(manifest.contains("galvo mirrors (projective fit of 9 points"), "{manifest}");
+    let hardware = ["scan", "--hardware", "rig.toml", "--galvo-fit", f, "--out", s];
+    let refused = crate::common::metaplate_bare(&hardware);
+    assert!(!refused.status.success());
+    assert!(
+        String::from_utf8_lossy(&refused.stderr).contains("--scene"),
+        "{}",
+        String::from_utf8_lossy(&refused.stderr)
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

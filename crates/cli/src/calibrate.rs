@@ -26,7 +26,8 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     run::init_log(&common.out, "calibrate")?;
     let Opened { plate, mut rig, lab: _lab, .. } = rig::open(&common.source, |plate| {
         let points = Some(plate.driving_points());
-        Ok(LabOptions { seed: common.seed, cache_dir: common.cache.dir(), points, ..LabOptions::default() })
+        let galvo_fit = common.galvo_fit()?;
+        Ok(LabOptions { seed: common.seed, cache_dir: common.cache.dir(), points, galvo_fit, ..LabOptions::default() })
     })?;
     let config = CalibrationConfig { seed: common.seed.unwrap_or(plate.scene.seed), ..CalibrationConfig::default() };
     let control = RunControl::new();

@@ -77,6 +77,11 @@ pub struct RunArgs {
     /// Mock lab only: where the plate's Green's functions are cached.
     #[command(flatten)]
     pub cache: crate::cache::CacheArgs,
+    /// Mock lab only: aim through the lab's galvanometer mirrors with this taught fit (written by `metaplate aim
+    /// teach --scene S --out FILE`) instead of the lab's exact aim; the beam lands off by the fit's error and the
+    /// dataset carries it (its rig record names the fit).
+    #[arg(long, value_name = "FILE", requires = "scene")]
+    pub galvo_fit: Option<PathBuf>,
     /// Run this shell command (`sh -c CMD`) with a JSON summary on its standard input when the run finishes,
     /// stops, fails or stalls, once per event (mail, a chat webhook, a desktop notification: see the README).
     #[arg(long, value_name = "CMD")]
@@ -100,6 +105,17 @@ fn positive_seconds(text: &str) -> Result<f64, String> {
 }
 
 impl RunArgs {
+    /// The fit of `--galvo-fit`, read; `None` without it.
+    ///
+    /// # Errors
+    /// The file cannot be read or is not a galvo fit.
+    pub fn galvo_fit(&self) -> anyhow::Result<Option<metaplate_aim::galvo::GalvoFit>> {
+        let read = |path: &PathBuf| {
+            metaplate_aim::galvo::file::read(path).with_context(|| format!("reading the galvo fit {}", path.display()))
+        };
+        self.galvo_fit.as_ref().map(read).transpose()
+    }
+
     /// The recipe's output for `scene`, with the pre-flight report of `--preflight` if given.
     ///
     /// # Errors

@@ -56,7 +56,9 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     let Opened { plate, mut rig, lab: _lab, .. } = rig::open(&common.source, |plate| {
         let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
         let points = plate.small_plan_points(&plan).unwrap_or(plan.points);
-        Ok(LabOptions { seed: common.seed, cache_dir: common.cache.dir(), points: Some(points), ..Default::default() })
+        let galvo_fit = common.galvo_fit()?;
+        let cache_dir = common.cache.dir();
+        Ok(LabOptions { seed: common.seed, cache_dir, points: Some(points), galvo_fit, ..Default::default() })
     })?;
     let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
     let actuators = rig.wiring.actuator_channels.len();

@@ -53,6 +53,13 @@ pub(crate) struct ChainParams {
     pub band_hi_hz: f64,
 }
 
+/// The beam's offset from its prepared point, m: zero within the controller's resolution (it holds the beam in whole
+/// micrometres, so an exact aim reads back up to half a micrometre off), else as measured.
+fn beam_offset_m(dx_m: f64, dy_m: f64) -> (f64, f64) {
+    const RESOLUTION_M: f64 = 1e-6;
+    if dx_m.abs() < RESOLUTION_M && dy_m.abs() < RESOLUTION_M { (0.0, 0.0) } else { (dx_m, dy_m) }
+}
+
 /// The Green's functions and where their points are.
 #[derive(Debug)]
 pub(crate) struct Plate {
@@ -261,12 +268,19 @@ impl LabState {
             run.noise_key = mix64(measurement ^ 0x0015_E000);
         }
         // The aiming error is the scanner's at this point: keyed by the point alone, the same at every playback.
-        let aim_offset_m = if self.params.aim_error_rms_m > 0.0 {
+        let drawn_m = if self.params.aim_error_rms_m > 0.0 {
             let mut rng = SplitMix64::new(self.params.seed ^ site, AIM_STREAM);
             (self.params.aim_error_rms_m * rng.normal(), self.params.aim_error_rms_m * rng.normal())
         } else {
             (0.0, 0.0)
         };
+        // Plus where the beam really is against the point: nothing for the lab's exact aim, the fit's error for a
+        // beam steered by taught mirrors.
+        let landed_m = match (beam, point_k.and_then(|k| self.plate.positions_m.get(k))) {
+            (Some((x, y)), Some(&(px, py))) => beam_offset_m(x - px, y - py),
+            _ => (0.0, 0.0),
+        };
+        let aim_offset_m = (drawn_m.0 + landed_m.0, drawn_m.1 + landed_m.1);
         let draw = mix64(measurement ^ 0xD40F_0D40);
         let dropout_s = (unit_open(draw) < self.params.dropout_probability).then(|| {
             let at = playback.start_s + unit_open(mix64(draw)) * (playback.end_s() - playback.start_s);

@@ -239,11 +239,16 @@ pub struct LabOptions {
     pub ldv_link: LdvLink,
     /// Loopback voltage at the DAQ for a full-scale audio sample, V.
     pub loopback_volts_per_full_scale: f64,
+    /// How the rig aims the beam: `None`, the lab's exact in-process aimer ([`aim::LabAimer`]); a taught fit (from
+    /// teaching [`MockLab::mirrors`], as `metaplate aim teach --scene` does), the real galvo aimer
+    /// ([`metaplate_aim::galvo::GalvoAimer`]) over the lab's mirrors, so the beam lands where the fit and the
+    /// mirrors' unknown geometry put it, off by the fit's error, and the measurement carries that error.
+    pub galvo_fit: Option<metaplate_aim::galvo::GalvoFit>,
 }
 
 impl Default for LabOptions {
     /// Scene seed, no cache, every measured point, default plate model, 40 to 800 Hz (the paper's sweeps and their
-    /// low harmonics), 0.5 s responses, in-process LDV, 1 V loopback per full scale.
+    /// low harmonics), 0.5 s responses, in-process LDV, 1 V loopback per full scale, exact in-process aim.
     fn default() -> Self {
         Self {
             seed: None,
@@ -254,6 +259,7 @@ impl Default for LabOptions {
             ir_duration_s: 0.5,
             ldv_link: LdvLink::InProcess,
             loopback_volts_per_full_scale: 1.0,
+            galvo_fit: None,
         }
     }
 }
@@ -469,7 +475,18 @@ impl MockLab {
         }
         let pcm = MockPcm::new(&audio, Arc::clone(&self.clock), &self.scene.faults)
             .with_observer(Arc::new(self.shared.clone()));
-        let aim = Box::new(aim::LabAimer::new(Arc::clone(&self.ldv), Arc::clone(&self.clock)));
+        let aim: Box<dyn metaplate_core::aim::Aim + Send> = match &self.options.galvo_fit {
+            None => Box::new(aim::LabAimer::new(Arc::clone(&self.ldv), Arc::clone(&self.clock))),
+            Some(fit) => Box::new(
+                metaplate_aim::galvo::GalvoAimer::new(
+                    fit.clone(),
+                    Box::new(self.mirrors()),
+                    clock.clone(),
+                    metaplate_aim::galvo::GalvoSettings { settle_s: aim::SETTLE_S },
+                )
+                .map_err(|e| LabError::Driver { device: "galvo mirrors", detail: e.to_string() })?,
+            ),
+        };
         Ok(Rig { vibrometer, aim, daq, audio: Box::new(AudioDriver::new(pcm)), clock, wiring: self.wiring.clone() })
     }
 
@@ -490,7 +507,8 @@ impl MockLab {
 
     /// The lab's galvanometer mirrors ([`mirrors::MockMirrors`], geometry drawn from the scene's seed): the beam
     /// of the lab's vibrometer lands where they point, so a galvo aimer over them replaces the rig's in-process
-    /// aimer. Take them once: a second pair would steer the same beam.
+    /// aimer. Take them once: a second pair would steer the same beam (the rig takes a pair when
+    /// [`LabOptions::galvo_fit`] is set).
     pub fn mirrors(&self) -> mirrors::MockMirrors {
         mirrors::MockMirrors::on_ldv(mirrors::MirrorGeometry::seeded(self.scene.seed), Arc::clone(&self.ldv))
     }

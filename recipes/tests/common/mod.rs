@@ -28,13 +28,17 @@ pub fn metamaterial() -> Scene {
 /// files: the plate model's cost is per scene, so the tests share the 7 x 5 plan's lab and scan prefixes of it).
 pub fn lab_and_plan(scene: &Scene, nx: usize, ny: usize) -> (MockLab, ScanPoints) {
     let plan = ScanPoints::new(scene.grid, &scene.grid_mask(), Some((nx, ny))).unwrap();
+    (MockLab::new(scene, &lab_options(scene, &plan)).unwrap(), plan)
+}
+
+/// The options of [`lab_and_plan`]'s lab: `plan`'s points and the driving points, the shared cache.
+pub fn lab_options(scene: &Scene, plan: &ScanPoints) -> LabOptions {
     let grid_len = scene.grid.len();
     let mut points = plan.points.clone();
     points.extend((0..scene.actuators.len()).map(|k| grid_len + k));
     let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("greens-cache");
     std::fs::create_dir_all(&cache).unwrap();
-    let options = LabOptions { points: Some(points), cache_dir: Some(cache), ..LabOptions::default() };
-    (MockLab::new(scene, &options).unwrap(), plan)
+    LabOptions { points: Some(points), cache_dir: Some(cache), ..LabOptions::default() }
 }
 
 /// The output of a run of `scene` into `dir`.
