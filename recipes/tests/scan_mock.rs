@@ -37,22 +37,7 @@ fn a_7x5_metamaterial_scan_matches_the_ground_truth_aimed_exactly_and_through_ta
     teach.start(&mut mirrors).unwrap();
     teach_like_a_user(&mut teach, &mut mirrors).unwrap();
     let fit = teach.fit(FitModel::Projective).unwrap();
-    // The lab takes an aiming error into a response through its slope, from the prepared neighbours of the point:
-    // the plan's points' grid neighbours are prepared too (cut from the same cache entry).
-    let mut options = LabOptions { galvo_fit: Some(fit), ..lab_options(&scene, &plan) };
-    let (grid, on_plate) = (scene.grid, scene.grid_mask());
-    let neighbours = plan.points.iter().flat_map(|&p| {
-        let (ix, iy) = grid.indices(p);
-        [(ix.wrapping_sub(1), iy), (ix + 1, iy), (ix, iy.wrapping_sub(1)), (ix, iy + 1)]
-            .into_iter()
-            .filter(|&(x, y)| x < grid.nx && y < grid.ny)
-            .map(|(x, y)| grid.index(x, y))
-            .filter(|&q| on_plate[q])
-    });
-    let points = options.points.get_or_insert_with(Vec::new);
-    points.extend(neighbours);
-    points.sort_unstable();
-    points.dedup();
+    let options = LabOptions { galvo_fit: Some(fit), ..lab_options(&scene, &plan) };
     let galvo_lab = MockLab::new(&scene, &options).unwrap();
     let (galvo_median, galvo_worst) = scan_errors(&galvo_lab, &plan, &scene);
     eprintln!("through the taught mirrors: median {galvo_median:.3} dB, worst {galvo_worst:.3} dB (exact {median:.3})");
@@ -65,6 +50,8 @@ fn a_7x5_metamaterial_scan_matches_the_ground_truth_aimed_exactly_and_through_ta
     // phase error of at most 0.1 rad, -20 dB, and far less at most points and frequencies: the median moved by
     // 0.14 dB when measured; 1 dB is the budget for a taught aim.
     assert!(galvo_median < median + 1.0, "median {galvo_median:.1} dB through the mirrors, {median:.1} dB exact");
+    // ... yet it is there: the responses are not the exactly aimed ones (the lab takes the beam's real offset).
+    assert_ne!(galvo_median, median, "the taught aim's offsets changed no response");
     assert!(galvo_worst < -15.0, "worst error {galvo_worst:.1} dB through the mirrors");
 }
 

@@ -78,8 +78,8 @@ pub struct RunArgs {
     #[command(flatten)]
     pub cache: crate::cache::CacheArgs,
     /// Mock lab only: aim through the lab's galvanometer mirrors with this taught fit (written by `metaplate aim
-    /// teach --scene S --out FILE`) instead of the lab's exact aim; the beam lands off by the fit's error and the
-    /// dataset carries it (its rig record names the fit).
+    /// teach --scene S --out FILE`) instead of the lab's exact aim; the beam lands off by the fit's error, which a
+    /// scan's responses carry (a calibration's, on the magnets, do not); the rig record names the fit.
     #[arg(long, value_name = "FILE", requires = "scene")]
     pub galvo_fit: Option<PathBuf>,
     /// Run this shell command (`sh -c CMD`) with a JSON summary on its standard input when the run finishes,

@@ -69,8 +69,10 @@ impl AlsaCaptureDaq {
         }
     }
 
-    /// Refuses to configure unless the PCM reports exactly this channel map: one ALSA short name per channel, in
-    /// channel order (`["FL", "FR"]`; case ignored). Without it any map, or none, is taken.
+    /// Refuses to configure unless the PCM reports exactly this channel map: one ALSA short name per channel the
+    /// stream opens with, in channel order (`["FL", "FR"]`; case ignored). The stream asks for as many channels as
+    /// the highest input used: a `hw:` PCM opens with its own count, but a `plughw:` one with exactly that many,
+    /// so name the map of those. Without it any map, or none, is taken.
     pub fn expect_channel_map(mut self, positions: Vec<String>) -> Self {
         self.expected_channel_map = Some(positions.iter().map(|p| p.trim().to_ascii_uppercase()).collect());
         self
@@ -289,7 +291,7 @@ fn channel_map(pcm: &PCM) -> Option<Vec<String>> {
     // Through `write!`, not `to_string`: the crate's `Display` fails (rather than prints) a map ALSA cannot print.
     let mut text = String::new();
     write!(text, "{map}").ok()?;
-    let positions: Vec<String> = text.split_whitespace().map(str::to_owned).collect();
+    let positions: Vec<String> = text.split_whitespace().map(str::to_ascii_uppercase).collect();
     (!positions.is_empty()).then_some(positions)
 }
 

@@ -177,7 +177,8 @@ pub struct AlsaDaq {
     /// The inputs' voltage at digital full scale, V (from the interface's manual at the gain in use; for example
     /// 1.74 for +4 dBu line inputs at 0 dB): `wiring.daq_range_v` must be this.
     pub full_scale_v: f64,
-    /// The channel map the PCM must report, one ALSA short name per channel (`["FL", "FR"]`, `["AUX0", "AUX1"]`):
+    /// The channel map the PCM must report, one ALSA short name per channel the stream opens with (`["FL", "FR"]`,
+    /// `["AUX0", "AUX1"]`; a `hw:` PCM opens all its channels, a `plughw:` one as many as the highest input used):
     /// any other, or none, is refused when a run opens the stream, the error naming what it reports. Default: any
     /// map, or none.
     pub channel_map: Option<Vec<String>>,

@@ -644,3 +644,18 @@ impl metaplate_mock_daq::SignalSource for LabSource {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::beam_offset_m;
+
+    /// An exact aim reads back within the controller's whole micrometre: no offset, so the response is the point's
+    /// own, bit for bit; a beam really off the point keeps its offset, sign and all.
+    #[test]
+    fn the_beam_offset_is_zero_within_the_controllers_micrometre_and_kept_beyond() {
+        assert_eq!(beam_offset_m(0.49e-6, -0.49e-6), (0.0, 0.0));
+        assert_eq!(beam_offset_m(-1e-18, 0.0), (0.0, 0.0));
+        assert_eq!(beam_offset_m(0.2e-3, 0.0), (0.2e-3, 0.0));
+        assert_eq!(beam_offset_m(0.0, -1.5e-6), (0.0, -1.5e-6));
+    }
+}

@@ -242,7 +242,8 @@ pub struct LabOptions {
     /// How the rig aims the beam: `None`, the lab's exact in-process aimer ([`aim::LabAimer`]); a taught fit (from
     /// teaching [`MockLab::mirrors`], as `metaplate aim teach --scene` does), the real galvo aimer
     /// ([`metaplate_aim::galvo::GalvoAimer`]) over the lab's mirrors, so the beam lands where the fit and the
-    /// mirrors' unknown geometry put it, off by the fit's error, and the measurement carries that error.
+    /// mirrors' unknown geometry put it, off by the fit's error. The responses at grid points carry that error
+    /// (their neighbours are prepared for the slope); those on the magnets, where a calibration aims, do not.
     pub galvo_fit: Option<metaplate_aim::galvo::GalvoFit>,
 }
 
@@ -293,6 +294,9 @@ pub struct MockLab {
     plate: Arc<chain::Plate>,
     windows: FaultWindows,
     wiring: Wiring,
+    /// The mirrors' geometry, from the scene's own seed: hardware, not one of the draws `LabOptions::seed`
+    /// replaces, so a fit taught on the scene's mirrors (`metaplate aim teach --scene`) fits them at every seed.
+    mirror_geometry: mirrors::MirrorGeometry,
     rig_taken: Mutex<bool>,
     #[cfg_attr(not(feature = "pty"), allow(dead_code))] // Only the pseudo-terminal link fills it.
     pty: Mutex<Option<PtyServer>>,
@@ -317,6 +321,7 @@ impl MockLab {
     /// model refuses, a cache that cannot be written).
     pub fn new(scene: &Scene, options: &LabOptions) -> Result<MockLab, LabError> {
         scene.validate()?;
+        let mirror_geometry = mirrors::MirrorGeometry::seeded(scene.seed);
         let mut scene = scene.clone();
         if let Some(seed) = options.seed {
             scene.seed = seed;
@@ -338,8 +343,10 @@ impl MockLab {
             points.extend((0..scene.actuators.len()).map(|k| grid_len + k));
             points
         });
-        // An aiming error needs the response's slope at each grid point: its measurable grid neighbours too.
-        let points = if scene.ldv.aim_error_rms_m > 0.0 { with_grid_neighbours(&scene, points) } else { points };
+        // An aiming error (the scene's drawn one, or a taught galvo fit's) needs the response's slope at each grid
+        // point: its measurable grid neighbours too.
+        let aim_errs = scene.ldv.aim_error_rms_m > 0.0 || options.galvo_fit.is_some();
+        let points = if aim_errs { with_grid_neighbours(&scene, points) } else { points };
         let request = GreensRequest {
             points: points.clone(),
             actuators: (0..scene.actuators.len()).collect(),
@@ -404,6 +411,7 @@ impl MockLab {
             plate,
             windows,
             wiring,
+            mirror_geometry,
             rig_taken: Mutex::new(false),
             pty: Mutex::new(None),
         })
@@ -505,12 +513,13 @@ impl MockLab {
         &self.wiring
     }
 
-    /// The lab's galvanometer mirrors ([`mirrors::MockMirrors`], geometry drawn from the scene's seed): the beam
+    /// The lab's galvanometer mirrors ([`mirrors::MockMirrors`], geometry drawn from the scene's own seed, whatever
+    /// [`LabOptions::seed`] says): the beam
     /// of the lab's vibrometer lands where they point, so a galvo aimer over them replaces the rig's in-process
     /// aimer. Take them once: a second pair would steer the same beam (the rig takes a pair when
     /// [`LabOptions::galvo_fit`] is set).
     pub fn mirrors(&self) -> mirrors::MockMirrors {
-        mirrors::MockMirrors::on_ldv(mirrors::MirrorGeometry::seeded(self.scene.seed), Arc::clone(&self.ldv))
+        mirrors::MockMirrors::on_ldv(self.mirror_geometry, Arc::clone(&self.ldv))
     }
 
     /// The mock LDV device (to inspect the controller, or latch a fault by hand in a test).

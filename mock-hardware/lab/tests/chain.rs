@@ -216,3 +216,14 @@ fn the_true_velocity_of_a_drive_is_its_convolution_with_the_true_response() {
         assert!(err.to_string().contains(needle), "{err}");
     }
 }
+
+/// The galvo mirrors are hardware: their geometry is the scene's own seed's whatever seed the lab's draws take, so
+/// a fit taught on the scene's mirrors (`metaplate aim teach --scene`) steers a lab run with `--seed` as well.
+#[test]
+fn the_mirrors_are_the_scenes_whatever_seed_the_draws_take() {
+    let scene = common::scene(vec![], true);
+    let reseeded = common::lab(&scene, Some(scene.seed ^ 0x5eed));
+    let taught = metaplate_lab::mirrors::MirrorGeometry::seeded(scene.seed);
+    assert_eq!(reseeded.mirrors().geometry(), Some(taught));
+    assert_ne!(metaplate_lab::mirrors::MirrorGeometry::seeded(scene.seed ^ 0x5eed), taught, "the seeds draw apart");
+}

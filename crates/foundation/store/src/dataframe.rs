@@ -43,7 +43,10 @@ impl Dataset {
                 }
             });
         }
-        // `committed_files` refuses an empty dataset, so one file at least was read.
-        frame.ok_or_else(|| StoreError::EmptyDataset { dir: dir.to_path_buf() })
+        // `committed_files` refuses an empty dataset, so one file at least was read. One chunk per column, not one
+        // per committed file (hundreds for a full scan), as polars' own readers give.
+        let mut frame = frame.ok_or_else(|| StoreError::EmptyDataset { dir: dir.to_path_buf() })?;
+        frame.rechunk_mut();
+        Ok(frame)
     }
 }
