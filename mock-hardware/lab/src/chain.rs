@@ -56,8 +56,8 @@ pub(crate) struct ChainParams {
 /// The beam's offset from its prepared point, m: zero within the controller's resolution (it holds the beam in whole
 /// micrometres, so an exact aim reads back up to half a micrometre off), else as measured.
 fn beam_offset_m(dx_m: f64, dy_m: f64) -> (f64, f64) {
-    const RESOLUTION_M: f64 = 1e-6;
-    if dx_m.abs() < RESOLUTION_M && dy_m.abs() < RESOLUTION_M { (0.0, 0.0) } else { (dx_m, dy_m) }
+    let within = |d: f64| d.abs() < metaplate_mock_ldv::BEAM_RESOLUTION_M;
+    if within(dx_m) && within(dy_m) { (0.0, 0.0) } else { (dx_m, dy_m) }
 }
 
 /// The Green's functions and where their points are.

@@ -14,6 +14,9 @@ struct DecoderState {
     low_pass: Option<usize>,
 }
 
+/// Where the controller holds the beam, m: whole micrometres (an exact aim reads back up to half of this off).
+pub const BEAM_RESOLUTION_M: f64 = 1e-6;
+
 /// The mock controller: its unit, each decoder's range and filters, remote and echo, the autofocus, and the
 /// signal level from the scene's speckle model at the beam's spot (set by whoever aims the beam: in the mock lab,
 /// the lab itself).
@@ -76,17 +79,17 @@ impl MockController {
         &self.unit
     }
 
-    /// Puts the beam on (`x_m`, `y_m`), rounded to whole micrometres (the speckle is drawn per micrometre); a new
-    /// spot is tracked afresh, so a dropout in progress ends.
+    /// Puts the beam on (`x_m`, `y_m`), rounded to whole micrometres ([`BEAM_RESOLUTION_M`]; the speckle is drawn
+    /// per micrometre); a new spot is tracked afresh, so a dropout in progress ends.
     pub fn set_beam(&mut self, x_m: f64, y_m: f64) {
-        let um = |v: f64| (v * 1e6).round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
+        let um = |v: f64| (v / BEAM_RESOLUTION_M).round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
         self.beam_um = Some((um(x_m), um(y_m)));
         self.dropout_queries_left = 0;
     }
 
     /// Where the beam is, m (whole micrometres); `None` before it was first aimed.
     pub fn beam_m(&self) -> Option<(f64, f64)> {
-        self.beam_um.map(|(x, y)| (f64::from(x) * 1e-6, f64::from(y) * 1e-6))
+        self.beam_um.map(|(x, y)| (f64::from(x) * BEAM_RESOLUTION_M, f64::from(y) * BEAM_RESOLUTION_M))
     }
 
     /// The speckle level at the beam's spot, 0 to 1 (0 before the beam was aimed).

@@ -32,7 +32,7 @@ mod served;
 mod speckle;
 mod unit;
 
-pub use controller::MockController;
+pub use controller::{BEAM_RESOLUTION_M, MockController};
 pub use device::MockDevice;
 pub use faults::{Fault, FaultSchedule, TimedFaults};
 pub use inprocess::MockLine;
