@@ -6,7 +6,6 @@
 //! `disk_free_bytes` stands for the lab computer's free space; `--ldv-pty` serves the mock LDV on a pseudo-terminal
 //! and drives it through the real serial transport, as a hardware file's `serial` backend does.
 
-use std::io::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context;
@@ -128,13 +127,11 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Writes the report durably (a temporary file, fsync'd, renamed): a report that exists is whole.
+/// Writes the report durably (the store's write: a temporary file, fsync'd, renamed): a report that exists is whole.
 fn write_report(path: &std::path::Path, document: &serde_json::Value) -> anyhow::Result<()> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-    let mut file = tempfile::NamedTempFile::new_in(dir)
-        .with_context(|| format!("cannot write the report beside {}", path.display()))?;
-    writeln!(file, "{document:#}")?;
-    file.as_file().sync_all()?;
-    file.persist(path).with_context(|| format!("cannot write the report {}", path.display()))?;
-    Ok(())
+    let name = path.file_name().and_then(|n| n.to_str());
+    let name = name.with_context(|| format!("--report {} does not end in a file name", path.display()))?;
+    metaplate_store::write_bytes(dir, name, format!("{document:#}\n").as_bytes())
+        .with_context(|| format!("cannot write the report {}", path.display()))
 }

@@ -1,7 +1,7 @@
 //! The [`Rig`] a command runs on: the mock lab of a scene (`--scene`), or the real instruments a hardware file names
 //! (`--hardware FILE`), opened by the driver registry ([`metaplate_drivers::open_plate_rig`], which documents the
-//! file's format and checks its wiring against its plate; `cli/hardware.example.toml` is an example). Which backends
-//! this binary has is its cargo features (default `hardware`: all of them).
+//! file's format and checks its wiring against its plate; `crates/cli/hardware.example.toml` is an example). Which
+//! backends this binary has is its cargo features (default `hardware`: all of them).
 
 use std::path::{Path, PathBuf};
 

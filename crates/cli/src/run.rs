@@ -44,7 +44,7 @@ pub struct Source {
     /// runs the real drivers on a virtual clock, so hours of measurement take minutes.
     #[arg(long)]
     pub scene: Option<String>,
-    /// Run on the real instruments named in this hardware file (format: `cli/hardware.example.toml`).
+    /// Run on the real instruments named in this hardware file (format: `crates/cli/hardware.example.toml`).
     #[arg(long)]
     pub hardware: Option<PathBuf>,
 }
@@ -108,12 +108,9 @@ impl RunArgs {
     /// The fit of `--galvo-fit`, read; `None` without it.
     ///
     /// # Errors
-    /// The file cannot be read or is not a galvo fit.
+    /// The file cannot be read or is not a galvo fit (the error names the file).
     pub fn galvo_fit(&self) -> anyhow::Result<Option<metaplate_aim::galvo::GalvoFit>> {
-        let read = |path: &PathBuf| {
-            metaplate_aim::galvo::file::read(path).with_context(|| format!("reading the galvo fit {}", path.display()))
-        };
-        self.galvo_fit.as_ref().map(read).transpose()
+        Ok(self.galvo_fit.as_deref().map(metaplate_aim::galvo::file::read).transpose()?)
     }
 
     /// The recipe's output for `scene`, with the pre-flight report of `--preflight` if given.

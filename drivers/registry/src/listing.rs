@@ -138,7 +138,7 @@ fn described(found: &Found) -> String {
 pub fn draft_hardware_file(listings: &[Listing], path: &Path) -> Result<String, HardwareError> {
     let mut text = String::from(
         "# A hardware file drafted by `metaplate devices --write-hardware` from what was connected. Lines marked\n\
-         # CHOOSE need your decision; the format is documented in `cli/hardware.example.toml` and the\n\
+         # CHOOSE need your decision; the format is documented in `crates/cli/hardware.example.toml` and the\n\
          # metaplate-drivers crate.\n\n\
          plate = \"metamaterial\"   # CHOOSE: the scene describing your plate (built-in name or scene file)\n\n\
          [ldv]\nbackend = \"polytec\"\n",
