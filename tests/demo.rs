@@ -86,6 +86,9 @@ fn the_demo_calibrates_scans_analyses_and_renders_both_plates() {
                 assert!(f.metadata().map(|m| m.len() > 0).unwrap_or(false), "{} missing", f.display());
             }
         }
+        // The 7 x 4 scan fills 2 % of its lattice: every k-space estimate is hollow, and the title says why.
+        let svg = std::fs::read_to_string(out.join(plate).join("figures").join("wavelength.svg")).unwrap();
+        assert!(svg.contains("hollow: lattice 2 % filled, under 50 %"), "{plate}: wavelength title");
     }
     // Both plates on shared axes.
     assert_eq!(summary["comparison_figures"].as_array().map(Vec::len), Some(4), "{}", summary["comparison_figures"]);

@@ -205,7 +205,8 @@ fn caption(stem: &str) -> &'static str {
     match stem {
         "wavelength" => {
             "Flexural wavelength against frequency by the paper's k-space method (median over the actuators with \
-             the interquartile range). Hollow markers fall outside what the lattice resolves (dotted lines)."
+             the interquartile range). Hollow markers fall outside what the lattice resolves (dotted lines), or are \
+             all hollow when less than half the lattice was measured (the title says so)."
         }
         "focus_snapshots" => {
             "The wave field around the focus time when an impulse is focused at the plate's centre (time reversal \

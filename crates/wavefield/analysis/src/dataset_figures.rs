@@ -13,6 +13,7 @@ use crate::authority::DomainAuthority;
 use crate::dataset_report::{DOMAIN_EDGE_KEYS, DatasetAnalysis, DatasetAnalysisParts, edge_key};
 use crate::error::{AnalysisError, chain};
 use crate::focus::focus_snapshot;
+use crate::lattice::MIN_LATTICE_FILL;
 use crate::report::ReportOptions;
 
 /// Instants of the focus snapshots relative to the focus time, s.
@@ -85,11 +86,20 @@ fn wavelength_references(analyses: &[&DatasetAnalysis], with_paper: bool) -> fig
     }
 }
 
-/// Title of a wavelength figure.
+/// Title of a wavelength figure: the lattice, and why an estimate is drawn hollow (outside the resolvable range, or
+/// every estimate when the lattice is filled below [`MIN_LATTICE_FILL`]).
 fn wavelength_title(analysis: &DatasetAnalysis) -> String {
+    let lattice = analysis.lattice_text();
+    let fill = analysis.lattice.fill;
+    if fill < MIN_LATTICE_FILL {
+        return format!(
+            "Wavelength (k-space, median and IQR), {lattice}; hollow: lattice {:.0} % filled, under {:.0} %",
+            fill * 100.0,
+            MIN_LATTICE_FILL * 100.0
+        );
+    }
     format!(
-        "Wavelength (k-space, median and IQR), {}; hollow: outside {:.0} to {:.1} cm",
-        analysis.lattice_text(),
+        "Wavelength (k-space, median and IQR), {lattice}; hollow: outside {:.0} to {:.1} cm",
         analysis.wavelength_resolvable.shortest_m * 100.0,
         analysis.wavelength_resolvable.longest_m * 100.0,
     )
