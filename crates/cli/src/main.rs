@@ -132,7 +132,8 @@ fn main() -> std::process::ExitCode {
         _ => None,
     };
     let Err(error) = dispatch(cli.command) else { return std::process::ExitCode::SUCCESS };
-    let message = format!("{error:#}");
+    // Each cause once: many errors print their source inside their own message too.
+    let message = metaplate_core::error_chain::message(&*error);
     if let Some((recipe, args)) = run {
         run::report_failure(recipe, &args, &message);
     }

@@ -34,6 +34,7 @@
 //! - [`clock`]: [`Clock`](clock::Clock), with [`RealClock`](clock::RealClock) for the lab and
 //!   [`VirtualClock`](clock::VirtualClock) for the mock lab, which jumps forward instead of sleeping. Everything that
 //!   waits asks a `Clock`, never the operating system.
+//! - [`error_chain`]: [`message`](error_chain::message), an error and its causes as one line, each cause once.
 //! - [`hash`]: [`fnv1a_64`](hash::fnv1a_64), the stable non-cryptographic hash of cache keys and scene identities.
 //! - [`rng`]: [`SplitMix64`](rng::SplitMix64) and [`mix64`](rng::mix64), the one seeded generator of the library
 //!   code.
@@ -55,6 +56,7 @@ pub mod audio;
 pub mod clock;
 pub mod daq;
 pub mod design;
+pub mod error_chain;
 pub mod grid;
 pub mod hash;
 pub mod points;

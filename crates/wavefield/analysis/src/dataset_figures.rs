@@ -11,10 +11,11 @@ use metaplate_figures as figures;
 
 use crate::authority::DomainAuthority;
 use crate::dataset_report::{DOMAIN_EDGE_KEYS, DatasetAnalysis, DatasetAnalysisParts, edge_key};
-use crate::error::{AnalysisError, chain};
+use crate::error::AnalysisError;
 use crate::focus::focus_snapshot;
 use crate::lattice::MIN_LATTICE_FILL;
 use crate::report::ReportOptions;
+use metaplate_core::error_chain;
 
 /// Instants of the focus snapshots relative to the focus time, s.
 const SNAPSHOT_TAUS_S: [f64; 5] = [-0.004, -0.002, 0.0, 0.002, 0.004];
@@ -38,7 +39,7 @@ const PAPER_CONDITION_NUMBERS: [[(f64, f64); 3]; 2] =
 
 /// A figure's error as [`AnalysisError::Figure`].
 fn drawn<T>(name: &'static str, result: Result<T, figures::FigureError>) -> Result<T, AnalysisError> {
-    result.map_err(|e| AnalysisError::Figure { name, reason: chain(&e) })
+    result.map_err(|e| AnalysisError::Figure { name, reason: error_chain::message(&e) })
 }
 
 /// One plate's wavelengths, as the figure takes them (frequencies without an estimate left out).

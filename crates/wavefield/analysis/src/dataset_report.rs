@@ -12,10 +12,11 @@ use metaplate_core::scene::Scene;
 use metaplate_store::Dataset;
 use serde::Serialize;
 
-use crate::error::{AnalysisError, chain};
+use crate::error::AnalysisError;
 use crate::pixel::{PixelAreaMap, PixelAreaOptions, pixel_area_map};
 use crate::report::{PlateReport, ReportOptions, analyse};
 use crate::scattered::{ScatteredSummary, analyse_scattered};
+use metaplate_core::error_chain;
 
 /// Band of the propagation matrices, Hz: the refresh pulse's skirts (50 Hz) up to the wavelength's 600 Hz.
 pub const DATASET_G_BAND_HZ: (f64, f64) = (50.0, 625.0);
@@ -179,8 +180,8 @@ pub fn analyse_dataset(
     data: &Path,
     max_error_db: Option<f64>,
 ) -> Result<(DatasetAnalysis, DatasetAnalysisParts), AnalysisError> {
-    let dataset =
-        Dataset::open(data).map_err(|e| AnalysisError::Dataset { path: data.to_path_buf(), reason: chain(&e) })?;
+    let dataset = Dataset::open(data)
+        .map_err(|e| AnalysisError::Dataset { path: data.to_path_buf(), reason: error_chain::message(&e) })?;
     let grid = dataset.manifest().meta.grid;
     if let [point] = dataset.points() {
         let (x, y) = dataset.manifest().meta.position_m(*point as usize).unwrap_or_default();
@@ -193,13 +194,13 @@ pub fn analyse_dataset(
             ),
         });
     }
-    let selection = max_error_db
-        .map(|db| PointSelection::by_estimated_error(&dataset, db))
-        .transpose()
-        .map_err(|e| AnalysisError::Step { step: "selecting points by estimated error", reason: chain(&e) })?;
+    let selection =
+        max_error_db.map(|db| PointSelection::by_estimated_error(&dataset, db)).transpose().map_err(|e| {
+            AnalysisError::Step { step: "selecting points by estimated error", reason: error_chain::message(&e) }
+        })?;
     let kept = selection.as_ref().map(|s| s.kept.as_slice());
     let g = PropagationMatrices::from_dataset(&dataset, DATASET_G_BAND_HZ, kept)
-        .map_err(|e| AnalysisError::Step { step: "building G(omega)", reason: chain(&e) })?;
+        .map_err(|e| AnalysisError::Step { step: "building G(omega)", reason: error_chain::message(&e) })?;
     let meta = &dataset.manifest().meta;
     let (report, pixels, scattered, g) = match &meta.scattered {
         Some(_) => {

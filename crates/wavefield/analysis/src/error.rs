@@ -113,16 +113,3 @@ pub enum AnalysisError {
     #[error(transparent)]
     Dsp(#[from] DspError),
 }
-
-/// An error and its causes, after colons (as the binary prints a failure), for the variants that keep a lower
-/// crate's error as text (this type is `Clone` and `PartialEq`; theirs are not).
-pub(crate) fn chain(error: &dyn std::error::Error) -> String {
-    let mut text = error.to_string();
-    let mut source = error.source();
-    while let Some(cause) = source {
-        text.push_str(": ");
-        text.push_str(&cause.to_string());
-        source = cause.source();
-    }
-    text
-}
