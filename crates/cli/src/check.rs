@@ -131,7 +131,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
 fn write_report(path: &std::path::Path, document: &serde_json::Value) -> anyhow::Result<()> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
     let name = path.file_name().and_then(|n| n.to_str());
-    let name = name.with_context(|| format!("--report {} does not end in a file name", path.display()))?;
+    let name = name.with_context(|| format!("--report {} must end in a file name of UTF-8 text", path.display()))?;
     metaplate_store::write_bytes(dir, name, format!("{document:#}\n").as_bytes())
         .with_context(|| format!("cannot write the report {}", path.display()))
 }

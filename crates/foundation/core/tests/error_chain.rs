@@ -45,4 +45,8 @@ fn causes_follow_after_colons_each_once() {
     let plain = layer("outer", false, Some(layer("middle", false, Some(layer("inner", false, None)))));
     assert_eq!(message(&plain), "outer: middle: inner");
     assert_eq!(message(&layer("alone", false, None)), "alone");
+    // Only the parent is compared: a cause an unrelated outer layer happens to contain is kept.
+    let unrelated =
+        layer("reading /data/timed out/x.json", false, Some(layer("io", false, Some(layer("timed out", false, None)))));
+    assert_eq!(message(&unrelated), "reading /data/timed out/x.json: io: timed out");
 }

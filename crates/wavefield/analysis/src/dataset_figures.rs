@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use metaplate_control::PropagationMatrices;
+use metaplate_core::error_chain;
 use metaplate_core::grid::GridSpec;
 use metaplate_core::scene::{Outline, Scene};
 use metaplate_figures as figures;
@@ -15,7 +16,6 @@ use crate::error::AnalysisError;
 use crate::focus::focus_snapshot;
 use crate::lattice::MIN_LATTICE_FILL;
 use crate::report::ReportOptions;
-use metaplate_core::error_chain;
 
 /// Instants of the focus snapshots relative to the focus time, s.
 const SNAPSHOT_TAUS_S: [f64; 5] = [-0.004, -0.002, 0.0, 0.002, 0.004];
@@ -95,7 +95,7 @@ fn wavelength_title(analysis: &DatasetAnalysis) -> String {
     if fill < MIN_LATTICE_FILL {
         return format!(
             "Wavelength (k-space, median and IQR), {lattice}; hollow: lattice {:.0} % filled, under {:.0} %",
-            fill * 100.0,
+            (fill * 100.0).floor(),
             MIN_LATTICE_FILL * 100.0
         );
     }

@@ -8,6 +8,7 @@ use std::path::Path;
 
 use metaplate_control::PropagationMatrices;
 use metaplate_control::pixels::PointSelection;
+use metaplate_core::error_chain;
 use metaplate_core::scene::Scene;
 use metaplate_store::Dataset;
 use serde::Serialize;
@@ -16,7 +17,6 @@ use crate::error::AnalysisError;
 use crate::pixel::{PixelAreaMap, PixelAreaOptions, pixel_area_map};
 use crate::report::{PlateReport, ReportOptions, analyse};
 use crate::scattered::{ScatteredSummary, analyse_scattered};
-use metaplate_core::error_chain;
 
 /// Band of the propagation matrices, Hz: the refresh pulse's skirts (50 Hz) up to the wavelength's 600 Hz.
 pub const DATASET_G_BAND_HZ: (f64, f64) = (50.0, 625.0);
