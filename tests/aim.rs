@@ -7,15 +7,12 @@ use std::io::Write as _;
 use std::process::{Command, Stdio};
 use std::sync::Arc;
 
-use metaplate_aim::galvo::teach::{Teach, parse_marks_mm};
 use metaplate_aim::galvo::{GalvoAimer, GalvoSettings, file};
 use metaplate_core::aim::Aim;
 use metaplate_core::clock::VirtualClock;
 use metaplate_core::scene::Scene;
-use metaplate_lab::mirrors::{MIRRORS_LIMIT_V, MirrorGeometry, MockMirrors};
-use metaplate_lab::teacher::teach_like_a_user;
-
-const MARKS_MM: &str = "# x, y in mm\n-100,-50\n0,-50\n100,-50\n-100,0\n0,0\n100,0\n-100,50\n0,50\n100,50\n";
+use metaplate_lab::mirrors::{MirrorGeometry, MockMirrors};
+use metaplate_lab::teacher::{NINE_MARKS_MM, teach_nine_marks};
 
 #[test]
 fn aim_teach_on_the_mock_galvo_with_scripted_keys_lands_a_7_by_5_scan_within_0_3_mm() {
@@ -23,14 +20,11 @@ fn aim_teach_on_the_mock_galvo_with_scripted_keys_lands_a_7_by_5_scan_within_0_3
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let marks_file = dir.join("marks.txt");
-    std::fs::write(&marks_file, MARKS_MM).unwrap();
+    std::fs::write(&marks_file, NINE_MARKS_MM).unwrap();
     // The user's keys, found on the mirrors the binary builds for the scene (same seed, same start).
     let scene = Scene::builtin("metamaterial").unwrap();
     let geometry = MirrorGeometry::seeded(scene.seed);
-    let mut mirrors = MockMirrors::new(geometry);
-    let mut teach = Teach::new(parse_marks_mm(MARKS_MM, "marks").unwrap(), MIRRORS_LIMIT_V).unwrap();
-    teach.start(&mut mirrors).unwrap();
-    let keys = teach_like_a_user(&mut teach, &mut mirrors).unwrap();
+    let (teach, keys) = teach_nine_marks(geometry).unwrap();
 
     let fit_path = dir.join("galvo-fit.toml");
     let mut child = Command::new(env!("CARGO_BIN_EXE_metaplate"))

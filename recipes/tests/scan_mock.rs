@@ -6,10 +6,9 @@ use crate::common;
 
 use common::{BAND_HZ, error_db, lab_and_plan, lab_options, median_and_worst, metamaterial, output, quick_config};
 use metaplate_aim::galvo::FitModel;
-use metaplate_aim::galvo::teach::Teach;
 use metaplate_core::scene::Scene;
-use metaplate_lab::mirrors::{MIRRORS_LIMIT_V, MirrorGeometry, MockMirrors};
-use metaplate_lab::teacher::teach_like_a_user;
+use metaplate_lab::mirrors::MirrorGeometry;
+use metaplate_lab::teacher::teach_nine_marks;
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::scan::{ScanPoints, scan};
 use metaplate_recipes::{RunControl, Silent};
@@ -31,11 +30,7 @@ fn a_7x5_metamaterial_scan_matches_the_ground_truth_aimed_exactly_and_through_ta
     assert!(worst < -15.0, "worst error {worst:.1} dB");
 
     // The mirrors of the scene's seed taught on nine marks spanning the plan (as `metaplate aim teach --scene`).
-    let mut mirrors = MockMirrors::new(MirrorGeometry::seeded(scene.seed));
-    let marks_m = [-0.1, 0.0, 0.1].into_iter().flat_map(|x| [-0.05, 0.0, 0.05].map(|y| (x, y))).collect();
-    let mut teach = Teach::new(marks_m, MIRRORS_LIMIT_V).unwrap();
-    teach.start(&mut mirrors).unwrap();
-    teach_like_a_user(&mut teach, &mut mirrors).unwrap();
+    let (teach, _) = teach_nine_marks(MirrorGeometry::seeded(scene.seed)).unwrap();
     let fit = teach.fit(FitModel::Projective).unwrap();
     let options = LabOptions { galvo_fit: Some(fit), ..lab_options(&scene, &plan) };
     let galvo_lab = MockLab::new(&scene, &options).unwrap();

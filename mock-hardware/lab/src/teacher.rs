@@ -7,9 +7,26 @@
 //! a fine step is enough from there.
 
 use metaplate_aim::galvo::GalvoError;
-use metaplate_aim::galvo::teach::{Key, KeyDecoder, STEPS_V, Teach, TeachEvent};
+use metaplate_aim::galvo::teach::{Key, KeyDecoder, STEPS_V, Teach, TeachEvent, parse_marks_mm};
 
-use crate::mirrors::MockMirrors;
+use crate::mirrors::{MIRRORS_LIMIT_V, MirrorGeometry, MockMirrors};
+
+/// Nine marks, 3 x 3, spanning the built-in scenes' 7 x 5 scan inside their plates' outline, as a user writes them
+/// in a marks file (`metaplate aim teach --marks-file`), mm.
+pub const NINE_MARKS_MM: &str = "# x, y in mm\n-100,-50\n0,-50\n100,-50\n-100,0\n0,0\n100,0\n-100,50\n0,50\n100,50\n";
+
+/// The user of [`teach_like_a_user`] teaching [`NINE_MARKS_MM`] on mirrors of `geometry` from their start (as
+/// `metaplate aim teach --scene` builds them): the finished teaching, to fit, and the bytes pressed.
+///
+/// # Errors
+/// As [`teach_like_a_user`].
+pub fn teach_nine_marks(geometry: MirrorGeometry) -> Result<(Teach, Vec<u8>), GalvoError> {
+    let mut mirrors = MockMirrors::new(geometry);
+    let mut teach = Teach::new(parse_marks_mm(NINE_MARKS_MM, "marks")?, MIRRORS_LIMIT_V)?;
+    teach.start(&mut mirrors)?;
+    let keys = teach_like_a_user(&mut teach, &mut mirrors)?;
+    Ok((teach, keys))
+}
 
 /// The most keys the user presses before giving up (a user going round in circles is a bug).
 const MAX_PRESSES: usize = 20_000;
