@@ -12,6 +12,8 @@
 3. File size: no Rust source file of a crate's `src/` is longer than MAX_LINES (a file that long holds more than one
    concept: split it), and the binary's `src/` (crates/cli) holds at most MAX_BINARY_LINES in all (a thin binary:
    each command parses, calls a library, prints).
+4. No test left unrun: a library or binary built without a test harness (`[lib] test = false`, which saves the test
+   build a second compilation of it) holds no `#[cfg(test)]` code, whose tests nothing would run.
 
 usage: python3 scripts/check-architecture.py   (from anywhere in the repository)
 """
@@ -177,6 +179,22 @@ def check_sizes(root: Path, src: Path) -> list[str]:
     return problems
 
 
+def check_harness(root: Path, package: dict) -> list[str]:
+    problems = []
+    for target in package["targets"]:
+        if target.get("test", True) or not {"lib", "bin"} & set(target["kind"]):
+            continue
+        # Every file of the crate's src/ (a bin's modules sit beside its main.rs).
+        for file in sorted(Path(target["src_path"]).parent.rglob("*.rs")):
+            if "#[cfg(test)]" in file.read_text():
+                problems.append(
+                    f"unrun tests: {file.relative_to(root)} has #[cfg(test)] code, but {package['name']}'s "
+                    f"{target['kind'][0]} target is built without a test harness (test = false): move its tests to "
+                    "the crate's tests/"
+                )
+    return problems
+
+
 def main() -> int:
     root = Path(subprocess.check_output(["git", "rev-parse", "--show-toplevel"], text=True).strip())
     meta = json.loads(
@@ -190,6 +208,7 @@ def main() -> int:
         if src.is_dir():
             problems += check_circles(src, package["name"])
             problems += check_sizes(root, src)
+        problems += check_harness(root, package)
     binary_lines = sum(sum(1 for _ in f.open()) for f in (root / "crates/cli/src").rglob("*.rs"))
     if binary_lines > MAX_BINARY_LINES:
         problems.append(

@@ -10,3 +10,4 @@ mod faults;
 mod nidaqmx;
 #[cfg(feature = "usb")]
 mod real_device;
+mod units;

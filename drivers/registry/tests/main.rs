@@ -4,4 +4,5 @@
 
 mod galvo;
 mod hardware_file;
+mod units;
 mod zaber;

@@ -8,6 +8,7 @@ mod calibration;
 mod examples;
 mod malformed;
 mod roundtrip;
+mod units;
 
 /// The documented example's StreamConfig: AIN0 and AIN1 single-ended at x1, 24 samples per packet, 24 kHz.
 pub fn two_channels() -> metaplate_u6_protocol::StreamConfig {

@@ -224,25 +224,6 @@ fn unit_of(key: &str) -> Option<&'static str> {
         .map(|(_, u)| *u)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn unit_hints() {
-        let fields = ["outline", "thickness_m", "youngs_modulus_pa", "density_kg_m3", "loss_factor"];
-        assert_eq!(unit_hint("thickness_mm", &fields), Some(("thickness_m", "metres")));
-        assert_eq!(unit_hint("thickness", &fields), Some(("thickness_m", "metres")));
-        assert_eq!(unit_hint("youngs_modulus_gpa", &fields), Some(("youngs_modulus_pa", "pascals")));
-        assert_eq!(unit_hint("density_g_cm3", &fields), Some(("density_kg_m3", "kg/m^3")));
-        assert_eq!(unit_hint("colour", &fields), None);
-        // `loss_factor` has no unit, so `loss_factor_db` is not a unit mistake of it.
-        assert_eq!(unit_hint("loss_factor_db", &fields), None);
-        assert_eq!(unit_of("spacing_m"), Some("metres"));
-        assert_eq!(unit_of("loss_factor"), None);
-    }
-}
-
 /// What can go wrong reading a TOML file that is not a scene (a unit-cell design, a design search): it cannot be read,
 /// or it is not valid, located by file, line and key.
 #[derive(Debug, thiserror::Error)]

@@ -7,3 +7,4 @@ mod error_chain;
 mod grid;
 mod scene;
 mod scene_fuzz;
+mod units;

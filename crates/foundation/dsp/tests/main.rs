@@ -8,3 +8,4 @@ mod excitation;
 mod kirkeby;
 mod pyfar_crosscheck;
 mod roundtrip;
+mod units;

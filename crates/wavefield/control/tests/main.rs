@@ -5,3 +5,4 @@
 mod from_dataset;
 mod multi_pixel;
 mod solve_extremes;
+mod units;
