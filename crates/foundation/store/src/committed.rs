@@ -10,8 +10,7 @@ use crate::reader::Dataset;
 impl Dataset {
     /// The Parquet files the journal commits (or, for a dataset written before the journal, the manifest lists), in
     /// commit order: what another reader should read. Orphans and superseded files in `batches/` are not listed.
-    /// Nothing is verified here: use [`Dataset::open`] to verify. `Dataset::dataframe` (cargo feature `polars`) reads
-    /// them.
+    /// Nothing is verified here: use [`Dataset::open`] to verify.
     ///
     /// # Errors
     /// The manifest and journal errors of [`Dataset::open`]; [`StoreError::EmptyDataset`] if nothing is committed.

@@ -51,7 +51,7 @@
 //!   committed file at a time; [`Dataset::committed_keys`] reads the journal alone; [`Dataset::read_batch`] reads
 //!   one committed file, verified against its journal entry (with [`journal::view`], how a follower reads a dataset
 //!   as it grows). [`Dataset::committed_files`] lists the committed files for other readers; with the cargo
-//!   feature `polars`, `Dataset::dataframe` reads them into a polars `DataFrame`.
+//!   feature `polars`, `Dataset::dataframe` turns a dataset, read and verified, into a polars `DataFrame`.
 //! - [`wav`]: [`export_wav`] and [`write_wav_f32`] write 32-bit float multichannel WAV files (impulse responses,
 //!   drive signals); [`read_wav`] reads any WAV file.
 //! - [`write_bytes`]: a small file written durably outside a dataset (an experiment session's plan, for example).

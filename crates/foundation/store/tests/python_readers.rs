@@ -132,11 +132,12 @@ fn the_committed_files_are_the_journaled_ones() {
     assert!(matches!(Dataset::committed_files(empty.path()), Err(metaplate_store::StoreError::EmptyDataset { .. })));
 }
 
-/// `Dataset::dataframe` reads exactly the committed files, in the dataset's columns, and only the columns asked for.
+/// `Dataset::dataframe` holds exactly the committed rows, verified, in the dataset's columns, and only the columns
+/// asked for.
 #[cfg(feature = "polars")]
 #[test]
 fn the_polars_dataframe_holds_the_committed_rows() {
-    use polars_core::prelude::{ChunkCompareEq, DataType};
+    use polars_core::prelude::{ChunkCompareEq, DataType, TimeUnit, TimeZone};
     let dir = two_batches_and_an_orphan();
     let frame = Dataset::dataframe(dir.path(), None).unwrap();
     // Two committed batches of three rows; the orphan batch's rows are not read.
@@ -156,4 +157,22 @@ fn the_polars_dataframe_holds_the_committed_rows() {
     assert_eq!(small.height(), 6);
     let unknown = Dataset::dataframe(dir.path(), Some(&["no_such_column"])).unwrap_err();
     assert!(matches!(unknown, metaplate_store::StoreError::Polars { .. }), "{unknown}");
+
+    // The values are the dataset's: a response as the reader reads it, the times in µs, UTC.
+    let dataset = Dataset::open(dir.path()).unwrap();
+    let ir = one.column("ir").unwrap().array().unwrap().get_as_series(0).unwrap();
+    let values: Vec<f32> = ir.f32().unwrap().into_no_null_iter().collect();
+    assert_eq!(values, dataset.ir(6, 3).unwrap());
+    assert_eq!(schema.get("measured_at"), Some(&DataType::Datetime(TimeUnit::Microseconds, Some(TimeZone::UTC))));
+    let times: Vec<Option<i64>> = frame.column("measured_at").unwrap().datetime().unwrap().physical().iter().collect();
+    assert_eq!(times, dataset.rows().iter().map(|r| r.measured_at_unix_us).collect::<Vec<_>>());
+
+    // Read and verified as `Dataset::open` reads: a committed file damaged in place is refused, not read.
+    let batch = dir.path().join("batches/batch-000001.parquet");
+    let mut bytes = std::fs::read(&batch).unwrap();
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0x01;
+    std::fs::write(&batch, bytes).unwrap();
+    let damaged = Dataset::dataframe(dir.path(), Some(&["point_index"])).unwrap_err();
+    assert!(matches!(damaged, metaplate_store::StoreError::ChecksumMismatch { .. }), "{damaged}");
 }
