@@ -16,9 +16,7 @@ use metaplate_lab::teacher::{NINE_MARKS_MM, teach_nine_marks};
 
 #[test]
 fn aim_teach_on_the_mock_galvo_with_scripted_keys_lands_a_7_by_5_scan_within_0_3_mm() {
-    let dir = std::env::temp_dir().join(format!("metaplate-aim-test-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::scratch("aim-cli", "teach");
     let marks_file = dir.join("marks.txt");
     std::fs::write(&marks_file, NINE_MARKS_MM).unwrap();
     // The user's keys, found on the mirrors the binary builds for the scene (same seed, same start).

@@ -9,8 +9,7 @@ use std::process::Command;
 
 #[test]
 fn the_demo_calibrates_scans_analyses_and_renders_both_plates() {
-    let out = std::env::temp_dir().join(format!("metaplate-demo-test-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
+    let out = crate::common::scratch("demo-cli", "out");
     // Green's functions cached under the target directory, so reruns skip the plate model; the scene's own seed
     // (20240601), as the other tests' scans of the metamaterial plate and the ground truth, so the seed's rod heights
     // are one cache entry for all of them.

@@ -45,9 +45,7 @@ fn experiment_file(repeats: u32, repeat_pause_s: f64) -> String {
 fn fixtures() -> &'static (PathBuf, PathBuf, PathBuf, PathBuf) {
     static FIXTURES: OnceLock<(PathBuf, PathBuf, PathBuf, PathBuf)> = OnceLock::new();
     FIXTURES.get_or_init(|| {
-        let scratch = std::env::temp_dir().join(format!("metaplate-experiment-run-test-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&scratch);
-        std::fs::create_dir_all(&scratch).unwrap();
+        let scratch = common::scratch("experiment-run-cli", "fixtures");
         let (cal, scan) = common::calibrated_scan();
         let experiment = scratch.join("three-points.toml");
         std::fs::write(&experiment, experiment_file(4, 0.5)).unwrap();
