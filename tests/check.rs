@@ -137,6 +137,46 @@ fn the_check_runs_over_the_real_serial_transport_on_a_pseudo_terminal() {
     assert!(check(&report, "ldv_signal")["passed"] == true, "levels and velocities read over the serial line");
 }
 
+/// A hardware file whose instruments are not there (the example's serial port, U6 and sound card on a machine
+/// without them): `check` tries each, fails the check of every one it cannot open by name with exit code 3, and
+/// writes its report; a typo in the file is an error of the file, not a failed check.
+#[cfg(all(feature = "serial", feature = "labjack-u6", feature = "alsa", target_os = "linux"))]
+#[test]
+fn instruments_that_cannot_be_opened_fail_their_checks_by_name() {
+    let dir = common::scratch("check", "unopened");
+    let file = dir.join("rig.toml");
+    std::fs::write(&file, include_str!("../crates/cli/hardware.example.toml")).unwrap();
+    let report_path = dir.join("report.json");
+    let out = metaplate(&[
+        "check",
+        "--hardware",
+        file.to_str().unwrap(),
+        "--json",
+        "--report",
+        report_path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(3), "{}", text(&out.stderr));
+    let report: Value = serde_json::from_str(&text(&out.stdout)).unwrap();
+    assert_eq!(report["verdict"], "fail");
+    for (name, phrase) in [("vibrometer", "usb-FTDI"), ("daq", "360012345"), ("audio", "hw:CARD=24Ao")] {
+        let outcome = check(&report, name);
+        assert_eq!(outcome["passed"], false, "{outcome}");
+        assert!(outcome["message"].as_str().unwrap().contains(phrase), "{outcome}");
+    }
+    assert!(check(&report, "loopback")["message"].as_str().unwrap().starts_with("not run"), "{report:#}");
+    assert!(report["rig"]["error"].is_string() && report["plate"]["name"] == "metamaterial", "{report:#}");
+    let written: Value = serde_json::from_str(&std::fs::read_to_string(&report_path).unwrap()).unwrap();
+    assert_eq!(written["checks"], report["checks"]);
+    let lines = metaplate(&["check", "--hardware", file.to_str().unwrap()]);
+    let stderr = text(&lines.stderr);
+    assert!(stderr.contains("FAIL vibrometer: cannot open the LDV") && stderr.contains("FAIL audio"), "{stderr}");
+    assert!(text(&lines.stdout).starts_with("fail: vibrometer, daq, audio"), "{}", text(&lines.stdout));
+    std::fs::write(&file, include_str!("../crates/cli/hardware.example.toml").replace("[ldv]", "[ldvv]")).unwrap();
+    let typo = metaplate(&["check", "--hardware", file.to_str().unwrap(), "--json"]);
+    assert_eq!(typo.status.code(), Some(1), "{}", text(&typo.stderr));
+    assert!(text(&typo.stderr).contains("ldvv"), "{}", text(&typo.stderr));
+}
+
 /// The pre-flight of a real rig, only on request:
 /// `METAPLATE_HARDWARE=rig.toml cargo test -p metaplate-cli --test check -- --ignored --nocapture`.
 /// It moves the beam to the magnets and a few grid points and plays quiet chirps: turn the amplifier down.

@@ -135,3 +135,22 @@ fn a_full_disk_is_named_with_what_to_free() {
     let report = check(&with_setup("disk_free_bytes = 100000000"));
     assert_fails(&report, &["disk"], "only 100.0 MB free at /data/scan");
 }
+
+/// A rig whose instruments did not all open: each that failed fails the check of its name with its own message,
+/// the instrument checks no failure names are not run, and the verdict says which failed.
+#[test]
+fn instruments_that_did_not_open_fail_their_checks_by_name() {
+    let failed = [
+        ("ldv", "cannot open the LDV `/dev/ttyUSB0` (polytec): no answer".to_owned()),
+        ("aim", "cannot open the aimer `fit.toml` (galvo): the taught fit's residual".to_owned()),
+    ];
+    let report = PreflightReport::unopened(&failed);
+    assert!(!report.passed());
+    let names: Vec<&str> = report.checks.iter().map(|c| c.name).collect();
+    assert_eq!(names, ["vibrometer", "aim", "daq", "audio", "loopback", "clocks", "actuator_wiring", "ldv_signal"]);
+    assert_eq!(outcome(&report, "vibrometer").message, failed[0].1);
+    assert_eq!(outcome(&report, "aim").message, failed[1].1);
+    assert!(outcome(&report, "daq").message.starts_with("not run"), "{:?}", outcome(&report, "daq"));
+    assert!(report.checks.iter().all(|c| !c.passed));
+    assert!(report.verdict_line().starts_with("fail: vibrometer, aim, daq"), "{}", report.verdict_line());
+}

@@ -4,9 +4,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-
-/// Environment variable naming the cache directory outright (first choice of the default).
-pub const CACHE_DIR_ENV: &str = "METAPLATE_CACHE_DIR";
+use metaplate_plate::{CACHE_DIR_ENV, default_cache_dir};
 
 /// The Green's-function cache option of a command (`#[command(flatten)] cache: CacheArgs`).
 #[derive(Args, Debug, Clone, Default)]
@@ -42,38 +40,9 @@ impl CacheArgs {
     }
 }
 
-/// The default cache directory from the environment (`var` reads a variable): `$METAPLATE_CACHE_DIR`, else
-/// `$XDG_CACHE_HOME/metaplate`, else `$HOME/.cache/metaplate`; `None` when none is set. Empty values count as
-/// unset, and a relative `XDG_CACHE_HOME` is ignored (the XDG specification says so).
-pub fn default_cache_dir(var: impl Fn(&str) -> Option<std::ffi::OsString>) -> Option<PathBuf> {
-    let set = |name: &str| var(name).filter(|v| !v.is_empty()).map(PathBuf::from);
-    set(CACHE_DIR_ENV)
-        .or_else(|| set("XDG_CACHE_HOME").filter(|p| p.is_absolute()).map(|p| p.join("metaplate")))
-        .or_else(|| set("HOME").map(|p| p.join(".cache").join("metaplate")))
-}
-
 #[cfg(test)]
 mod tests {
-    use std::ffi::OsString;
-
     use super::*;
-
-    fn env(pairs: &[(&str, &str)]) -> impl Fn(&str) -> Option<OsString> {
-        let pairs: Vec<(String, OsString)> = pairs.iter().map(|(k, v)| ((*k).to_owned(), OsString::from(v))).collect();
-        move |name| pairs.iter().find(|(k, _)| k == name).map(|(_, v)| v.clone())
-    }
-
-    #[test]
-    fn the_default_follows_the_environment_in_order() {
-        let all = [("METAPLATE_CACHE_DIR", "/m"), ("XDG_CACHE_HOME", "/x"), ("HOME", "/h")];
-        assert_eq!(default_cache_dir(env(&all)), Some(PathBuf::from("/m")));
-        assert_eq!(default_cache_dir(env(&all[1..])), Some(PathBuf::from("/x/metaplate")));
-        assert_eq!(default_cache_dir(env(&all[2..])), Some(PathBuf::from("/h/.cache/metaplate")));
-        assert_eq!(default_cache_dir(env(&[])), None);
-        // Empty is unset; a relative XDG_CACHE_HOME is ignored.
-        let odd = [("METAPLATE_CACHE_DIR", ""), ("XDG_CACHE_HOME", "rel"), ("HOME", "/h")];
-        assert_eq!(default_cache_dir(env(&odd)), Some(PathBuf::from("/h/.cache/metaplate")));
-    }
 
     #[test]
     fn flags_override_the_default() {

@@ -11,10 +11,15 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 use metaplate_core::grid::GridSubset;
+use metaplate_core::rig::Rig;
+use metaplate_drivers::{HardwareError, HardwareFile};
 use metaplate_dsp::excitation::ExcitationProtocol;
 use metaplate_lab::{LabOptions, LdvLink};
 use metaplate_recipes::ScanPoints;
-use metaplate_recipes::preflight::{CheckOutcome, PlannedRun, PreflightConfig, keypad_check, preflight};
+use metaplate_recipes::preflight::{
+    CheckOutcome, PlannedRun, PreflightConfig, PreflightReport, keypad_check, preflight,
+};
+use metaplate_store::SceneId;
 
 use crate::rig::{self, Opened};
 use crate::run::{EXIT_FLAGGED, Source};
@@ -66,7 +71,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     if !(args.keypad_wait_s.is_finite() && args.keypad_wait_s >= 0.0) {
         anyhow::bail!("--keypad-wait-s {} must be finite and >= 0", args.keypad_wait_s);
     }
-    let Opened { plate, mut rig, mut keypad, lab } = rig::open(&args.source, |plate| {
+    let opened = rig::open(&args.source, |plate| {
         let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
         // A small plan is prepared whole (shared with a scan of it); a large one: the LDV points only.
         let points = plate
@@ -80,7 +85,11 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
             ldv_link,
             ..Default::default()
         })
-    })?;
+    });
+    let Opened { plate, mut rig, mut keypad, lab } = match opened {
+        Ok(opened) => opened,
+        Err(error) => return unopened(args, error),
+    };
     let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
     // The lab's disk stands for the lab computer's free space.
     let disk_budget = lab.as_ref().and(plate.scene.setup.disk_free_bytes);
@@ -112,14 +121,32 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         print(&outcome);
         report.checks.push(outcome);
     }
-    let document = report.document(&plate.id, env!("CARGO_PKG_VERSION"), &mut rig);
+    finish(args, &plate.id, &report, Some(&mut rig))
+}
+
+/// A hardware file whose instruments did not all open: each that failed is a failed check of its name (every
+/// fault at once), and the verdict `fail`. Any other error (the file, its plate, a missing backend) is returned.
+fn unopened(args: &CheckArgs, error: anyhow::Error) -> anyhow::Result<()> {
+    let failed = error.downcast_ref::<HardwareError>().map(HardwareError::failed_instruments).unwrap_or_default();
+    let (Some(file), false) = (&args.source.hardware, failed.is_empty()) else { return Err(error) };
+    let plate = rig::Plate::resolve(&HardwareFile::load(file)?.plate)?;
+    let report = PreflightReport::unopened(&failed);
+    for c in report.checks.iter().filter(|_| !args.json) {
+        eprintln!("  {} {}: {}", if c.passed { "ok  " } else { "FAIL" }, c.name, c.message);
+    }
+    finish(args, &plate.id, &report, None)
+}
+
+/// Writes the report (`--report`), prints it (the verdict line, or the JSON document), and exits 3 unless it passed.
+fn finish(args: &CheckArgs, plate: &SceneId, report: &PreflightReport, rig: Option<&mut Rig>) -> anyhow::Result<()> {
+    let document = report.document(plate, env!("CARGO_PKG_VERSION"), rig);
     if let Some(path) = &args.report {
         write_report(path, &document)?;
     }
-    if json_out {
-        println!("{document}");
+    if args.json {
+        println!("{document}")
     } else {
-        println!("{}", report.verdict_line());
+        println!("{}", report.verdict_line())
     }
     if !report.passed() {
         std::process::exit(EXIT_FLAGGED);

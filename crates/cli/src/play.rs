@@ -53,9 +53,9 @@ pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
     let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<Result<_, _>>()?;
     let (plate, mut rig, _lab) = match (&args.source.scene, &args.source.hardware) {
         (_, Some(file)) => {
-            let (plate, rig) = rig::hardware_rig(file)?;
+            let (plate, opened) = rig::hardware_rig_and_keypad(file)?;
             check_playable(&dataset, &plate.id)?;
-            (plate, rig, None)
+            (plate, opened.rig, None)
         }
         (Some(scene), None) => {
             let plate = Plate::resolve(scene)?;

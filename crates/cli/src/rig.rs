@@ -85,19 +85,10 @@ pub fn mock_rig_with(plate: &Plate, options: &LabOptions) -> anyhow::Result<(Moc
     Ok((lab, rig))
 }
 
-/// The plate and rig of the hardware file at `path`, every instrument opened (a keypad it names too, unused).
+/// The plate, rig and keypad (if it names one) of the hardware file at `path`, every instrument opened.
 ///
 /// # Errors
-/// The file, its plate, a backend this build lacks, or the first instrument that cannot be opened.
-pub fn hardware_rig(path: &Path) -> anyhow::Result<(Plate, Rig)> {
-    let (plate, opened) = hardware_rig_and_keypad(path)?;
-    Ok((plate, opened.rig))
-}
-
-/// As [`hardware_rig`], with the keypad the file names, if any.
-///
-/// # Errors
-/// As [`hardware_rig`].
+/// The file, its plate, a backend this build lacks, or the instruments that cannot be opened.
 pub fn hardware_rig_and_keypad(path: &Path) -> anyhow::Result<(Plate, OpenedRig)> {
     let (scene, opened) = metaplate_drivers::open_plate_rig(path)?;
     Ok((Plate::of(scene), opened))

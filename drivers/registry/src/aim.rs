@@ -5,6 +5,7 @@
 //! backend = "galvo"
 //! fit = "galvo-fit.toml"   # written by `metaplate aim teach`; relative to the hardware file's folder
 //! settle_ms = 2.0          # wait after each move, ms (>= 0)
+//! max_residual_mm = 0.5    # optional: the largest residual of the fit at a taught mark, mm (default 0.5)
 //!
 //! [aim.outputs]            # the two analog outputs driving the X and Y mirrors
 //! backend = "nidaqmx"
@@ -45,6 +46,9 @@ pub struct GalvoAim {
     pub fit: PathBuf,
     /// Wait after each move, ms.
     pub settle_ms: f64,
+    /// The largest residual of the fit at a taught mark the rig opens with, mm: a fit beyond it (marks taught
+    /// wrongly, or mirrors moved since) is refused, naming it.
+    pub max_residual_mm: f64,
     /// The outputs driving the mirrors.
     pub outputs: MirrorOutputsSection,
 }
@@ -80,7 +84,14 @@ fn default_limit_v() -> f64 {
 struct RawGalvo {
     fit: PathBuf,
     settle_ms: f64,
+    #[serde(default = "default_max_residual_mm")]
+    max_residual_mm: f64,
     outputs: toml::Table,
+}
+
+/// Half a millimetre: a twentieth of the 1 cm grid pitch, beyond the 0.3 mm a taught fit lands within.
+fn default_max_residual_mm() -> f64 {
+    0.5
 }
 
 /// Parses `[aim]`'s keys after its `backend` (`galvo`), for the hardware file at `path`.
@@ -93,6 +104,9 @@ pub(crate) fn parse_galvo(path: &Path, table: toml::Table) -> Result<AimSection,
         .map_err(|e: toml::de::Error| ("aim".to_owned(), e.message().trim_end().to_owned()))?;
     if !(raw.settle_ms.is_finite() && raw.settle_ms >= 0.0) {
         return Err(("aim.settle_ms".into(), format!("{} is not a time >= 0 ms", raw.settle_ms)));
+    }
+    if !(raw.max_residual_mm.is_finite() && raw.max_residual_mm > 0.0) {
+        return Err(("aim.max_residual_mm".into(), format!("{} is not a distance > 0 mm", raw.max_residual_mm)));
     }
     let mut outputs = raw.outputs;
     let backend = match outputs.remove("backend") {
@@ -123,5 +137,5 @@ pub(crate) fn parse_galvo(path: &Path, table: toml::Table) -> Result<AimSection,
         }
     };
     let fit = if raw.fit.is_absolute() { raw.fit } else { path.parent().unwrap_or(Path::new("")).join(raw.fit) };
-    Ok(AimSection::Galvo(GalvoAim { fit, settle_ms: raw.settle_ms, outputs }))
+    Ok(AimSection::Galvo(GalvoAim { fit, settle_ms: raw.settle_ms, max_residual_mm: raw.max_residual_mm, outputs }))
 }

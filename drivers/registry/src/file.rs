@@ -52,6 +52,13 @@ pub enum HardwareError {
         /// The driver's error.
         detail: String,
     },
+    /// Several instruments could not be opened (each tried whatever the others did): each one's error, in the order
+    /// LDV, DAQ, audio interface, keypad, aim.
+    #[error("{}", failures.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))]
+    Devices {
+        /// Each instrument's error ([`HardwareError::Device`], or [`HardwareError::File`] for a file it names).
+        failures: Vec<HardwareError>,
+    },
     /// The scene the file names as its `plate` cannot be read, or is invalid.
     #[error(transparent)]
     Scene(#[from] metaplate_core::scene::SceneError),
@@ -63,6 +70,26 @@ pub enum HardwareError {
         /// What does not fit.
         reason: String,
     },
+}
+
+impl HardwareError {
+    /// Each instrument of a [`HardwareError::Devices`] that could not be opened: its hardware file section (`ldv`,
+    /// `daq`, `audio`, `keypad`, `aim`) and the error's message. Empty for any other error (of the file, its plate,
+    /// the build): nothing was opened.
+    pub fn failed_instruments(&self) -> Vec<(&'static str, String)> {
+        let HardwareError::Devices { failures } = self else { return Vec::new() };
+        let section = |failure: &HardwareError| match failure {
+            HardwareError::Device { device, .. } => {
+                Capability::ALL.into_iter().find(|c| c.noun() == *device).map(Capability::section)
+            }
+            HardwareError::File { key, .. } => {
+                let prefix = key.split('.').next().unwrap_or_default();
+                Capability::ALL.into_iter().map(Capability::section).find(|s| *s == prefix)
+            }
+            _ => None,
+        };
+        failures.iter().map(|failure| (section(failure).unwrap_or("rig"), failure.to_string())).collect()
+    }
 }
 
 /// `[ldv]`: the vibrometer.

@@ -52,12 +52,13 @@ pub fn open_plate_rig(path: &Path) -> Result<(Scene, OpenedRig), HardwareError> 
 }
 
 /// Opens every instrument `file` names, in the order LDV, DAQ, audio interface (configured once at the file's
-/// rate and channel count, so that a missing card is found now rather than at the first point), keypad; on the
-/// real clock.
+/// rate and channel count, so that a missing card is found now rather than at the first point), keypad, aim; on
+/// the real clock. Each is tried whatever became of the others, so that one attempt names every fault.
 ///
 /// # Errors
 /// [`HardwareError::NotInThisBuild`] for the first backend this build lacks, before anything is opened;
-/// [`HardwareError::Device`] naming the first instrument that cannot be opened.
+/// [`HardwareError::Devices`] naming each instrument that cannot be opened
+/// ([`HardwareError::failed_instruments`]).
 pub fn open_rig(file: &HardwareFile) -> Result<OpenedRig, HardwareError> {
     for (capability, name) in file.backends() {
         if let Some(backend) = backends::find(capability, name)
@@ -72,12 +73,21 @@ pub fn open_rig(file: &HardwareFile) -> Result<OpenedRig, HardwareError> {
         }
     }
     let clock: Arc<dyn Clock> = Arc::new(RealClock::new());
-    let vibrometer = open_ldv(&file.ldv)?;
-    let daq = open_daq(&file.daq, &file.path)?;
-    let audio = open_audio(&file.audio)?;
-    let keypad = file.keypad.as_ref().map(|keypad| open_keypad(keypad, &clock)).transpose()?;
-    let aim = open_aim(file, &clock)?;
-    Ok(OpenedRig { rig: Rig { vibrometer, aim, daq, audio, clock, wiring: file.wiring() }, keypad })
+    fn kept<T>(failures: &mut Vec<HardwareError>, result: Result<T, HardwareError>) -> Option<T> {
+        result.map_err(|e| failures.push(e)).ok()
+    }
+    let mut failures = Vec::new();
+    let vibrometer = kept(&mut failures, open_ldv(&file.ldv));
+    let daq = kept(&mut failures, open_daq(&file.daq, &file.path));
+    let audio = kept(&mut failures, open_audio(&file.audio));
+    let keypad = kept(&mut failures, file.keypad.as_ref().map(|keypad| open_keypad(keypad, &clock)).transpose());
+    let aim = kept(&mut failures, open_aim(file, &clock));
+    match (vibrometer, daq, audio, keypad, aim) {
+        (Some(vibrometer), Some(daq), Some(audio), Some(keypad), Some(aim)) => {
+            Ok(OpenedRig { rig: Rig { vibrometer, aim, daq, audio, clock, wiring: file.wiring() }, keypad })
+        }
+        _ => Err(HardwareError::Devices { failures }),
+    }
 }
 
 /// The error of an instrument that could not be opened.
@@ -102,7 +112,10 @@ fn open_ldv(section: &LdvSection) -> Result<Box<dyn metaplate_core::vibrometer::
                 let error = |e: &dyn std::fmt::Display| device(Capability::Vibrometer, "polytec", &name, e);
                 let config = polytec.config().map_err(|e| error(&e))?;
                 let line = SerialPortLine::open(polytec.selector()).map_err(|e| error(&e))?;
-                let driver = PolytecDriver::new(line, RetryPolicy::default(), config).map_err(|e| error(&e))?;
+                let mut driver = PolytecDriver::new(line, RetryPolicy::default(), config).map_err(|e| error(&e))?;
+                // Connect now (identity, the decoder asked for and its ranges): a controller that does not answer,
+                // or lacks the decoder, is named when the rig opens rather than at the first point.
+                driver.decoder().map_err(|e| error(&e))?;
                 Ok(Box::new(driver))
             }
             #[cfg(not(feature = "serial"))]
@@ -262,6 +275,15 @@ fn open_aim(file: &HardwareFile, clock: &Arc<dyn Clock>) -> Result<Box<dyn Aim +
         key: "aim.fit".into(),
         reason: e.to_string(),
     })?;
+    let residual = fit.residual();
+    if residual.max_mm > galvo.max_residual_mm {
+        let detail = format!(
+            "the taught fit's residual, {:.3} mm at mark {}, is over aim.max_residual_mm = {} mm: teach the marks \
+             again (`metaplate aim teach`)",
+            residual.max_mm, residual.worst_point, galvo.max_residual_mm
+        );
+        return Err(device(Capability::Aim, "galvo", &galvo.fit.display().to_string(), detail));
+    }
     let outputs = open_mirror_outputs(file, &galvo.outputs)?;
     let settings = metaplate_aim::galvo::GalvoSettings { settle_s: galvo.settle_ms * 1e-3 };
     let aimer = metaplate_aim::galvo::GalvoAimer::new(fit, outputs, Arc::clone(clock), settings)

@@ -2,8 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
+use metaplate_aim::galvo::{FitModel, GalvoFit, TaughtPoint};
 use metaplate_drivers::aim::{AimSection, MirrorOutputsSection};
-use metaplate_drivers::{Capability, HardwareError, HardwareFile, open_galvo_outputs};
+use metaplate_drivers::{Capability, HardwareError, HardwareFile, open_galvo_outputs, open_rig};
 
 const EXAMPLE: &str = include_str!("../../../crates/cli/hardware.example.toml");
 
@@ -56,5 +57,44 @@ fn teaching_needs_a_galvo_section() {
         Err(HardwareError::File { key, .. }) => assert_eq!(key, "aim"),
         Err(other) => panic!("{other}"),
         Ok(_) => panic!("opened outputs the file does not name"),
+    }
+}
+
+/// A taught fit whose residual is over `aim.max_residual_mm` is refused when the rig opens, naming the aimer, the
+/// residual and the limit (one mark taught 2 mm off: marks taught wrongly, or mirrors moved since).
+#[test]
+fn a_fit_whose_residual_is_over_its_limit_is_refused_naming_the_aimer() {
+    let dir = tempfile::tempdir().unwrap();
+    let marks = [(0.0, 0.0), (0.4, 0.0), (0.4, 0.2), (0.0, 0.2), (0.2, 0.1), (0.1, 0.15), (0.3, 0.05)];
+    let points: Vec<TaughtPoint> = marks
+        .iter()
+        .enumerate()
+        .map(|(i, &(x_m, y_m))| {
+            let off_m = if i == 4 { 0.002 } else { 0.0 };
+            TaughtPoint { x_m, y_m, x_v: 20.0 * (x_m + off_m) - 4.0, y_v: 20.0 * y_m - 2.0 }
+        })
+        .collect();
+    let fit = GalvoFit::fit(FitModel::Projective, &points).unwrap();
+    assert!(fit.residual().max_mm > 0.5, "{}", fit.summary());
+    metaplate_aim::galvo::file::write(&dir.path().join("galvo-fit.toml"), &fit).unwrap();
+    let path = dir.path().join("rig.toml");
+    for (limit, refused) in [("", true), ("max_residual_mm = 5.0\n", false)] {
+        let galvo = GALVO.replace("settle_ms = 2.5\n", &format!("settle_ms = 2.5\n{limit}"));
+        let file = HardwareFile::parse(&format!("{EXAMPLE}{galvo}"), &path).unwrap();
+        let error = open_rig(&file).err().unwrap();
+        let aim: Vec<String> =
+            error.failed_instruments().into_iter().filter(|(s, _)| *s == "aim").map(|(_, m)| m).collect();
+        if refused {
+            assert_eq!(aim.len(), 1, "{error}");
+            assert!(aim[0].contains("max_residual_mm = 0.5") && aim[0].contains("aim teach"), "{}", aim[0]);
+        } else {
+            // Within a looser limit the fit passes, and the outputs (NI-DAQmx, absent here) are what fails.
+            assert!(aim.iter().all(|m| !m.contains("max_residual_mm")), "{aim:?}");
+        }
+    }
+    let bad = GALVO.replace("settle_ms = 2.5\n", "settle_ms = 2.5\nmax_residual_mm = 0.0\n");
+    match parse(&format!("{EXAMPLE}{bad}")) {
+        Err(HardwareError::File { key, .. }) => assert_eq!(key, "aim.max_residual_mm"),
+        other => panic!("{other:?}"),
     }
 }

@@ -255,9 +255,11 @@ fn the_examples_wiring_fits_its_plate() {
     assert_eq!((wiring.loopback_channel, wiring.audio_channels), (8, 10));
 }
 
+/// Every instrument is tried whatever became of the others, so one error names each that cannot be opened: here
+/// all three of the example's (no such serial port, U6 or sound card on this machine).
 #[test]
-#[cfg(feature = "serial")]
-fn a_missing_serial_port_is_named_in_the_error() {
+#[cfg(all(feature = "serial", feature = "labjack-u6", feature = "alsa", target_os = "linux"))]
+fn every_instrument_that_cannot_be_opened_is_named_in_one_error() {
     let missing = "/dev/metaplate-no-such-port";
     let (_dir, path) = edited(|text| {
         let start = text.find("port = ").unwrap();
@@ -265,9 +267,18 @@ fn a_missing_serial_port_is_named_in_the_error() {
         format!("{}port = \"{missing}\"{}", &text[..start], &text[end..])
     });
     let error = metaplate_drivers::open_plate_rig(&path).err().unwrap();
-    assert!(matches!(error, HardwareError::Device { device: "LDV", .. }), "{error:?}");
+    let HardwareError::Devices { failures } = &error else { panic!("{error:?}") };
+    assert!(matches!(failures[0], HardwareError::Device { device: "LDV", .. }), "{failures:?}");
+    let failed = error.failed_instruments();
+    let sections: Vec<&str> = failed.iter().map(|(section, _)| *section).collect();
+    assert_eq!(sections, ["ldv", "daq", "audio"], "{error}");
+    assert!(failed[0].1.contains("LDV") && failed[0].1.contains(missing), "{}", failed[0].1);
+    assert!(failed[1].1.contains("360012345") && failed[2].1.contains("hw:CARD=24Ao"), "{error}");
     let message = error.to_string();
-    assert!(message.contains("LDV") && message.contains(missing), "{message}");
+    assert!(failed.iter().all(|(_, m)| message.contains(m.as_str())), "one message names them all: {message}");
+    // An error of the file opens nothing, so it names no instrument.
+    let (_bad, bad) = edited(|text| text.replace("[ldv]", "[ldv_typo]"));
+    assert!(metaplate_drivers::open_plate_rig(&bad).err().unwrap().failed_instruments().is_empty());
 }
 
 #[test]

@@ -4,5 +4,6 @@
 
 mod galvo;
 mod hardware_file;
+mod serial_faults;
 mod units;
 mod zaber;

@@ -190,16 +190,48 @@ impl PreflightReport {
         json!({"verdict": self.verdict(), "checks": self.checks.iter().map(CheckOutcome::to_json).collect::<Vec<_>>()})
     }
 
+    /// The report of a rig whose instruments did not all open: each one that failed, as `(section, message)` with
+    /// its hardware file's section (`ldv`, `daq`, `audio`, `aim`, `keypad`), fails the check of its name (`ldv`'s is
+    /// `vibrometer`; the others' are the section's), and every instrument check of [`preflight`] not already named
+    /// is not run. The verdict is `fail`.
+    pub fn unopened(failed: &[(&str, String)]) -> Self {
+        let name_of = |section: &str| match section {
+            "ldv" => "vibrometer",
+            "daq" => "daq",
+            "audio" => "audio",
+            "keypad" => "keypad",
+            "aim" => "aim",
+            _ => "rig",
+        };
+        let mut checks: Vec<CheckOutcome> = failed
+            .iter()
+            .map(|(section, message)| {
+                CheckOutcome::fail(name_of(section), message.clone(), json!({"section": section}))
+            })
+            .collect();
+        let needs = "the instruments of the hardware file (every one opened)";
+        for name in ["vibrometer", "daq", "audio", "loopback", "clocks", "actuator_wiring", "ldv_signal"] {
+            if !checks.iter().any(|c| c.name == name) {
+                checks.push(CheckOutcome::not_run(name, needs));
+            }
+        }
+        Self { checks }
+    }
+
     /// The report as `metaplate check` prints and writes it: [`PreflightReport::to_json`] with when it was checked
     /// (`checked_at`, RFC 3339), the plate (`{"name", "hash"}`), the software's version and the rig's identities and
-    /// wiring (`rig`, as [`crate::rig_config`] gives it, or `{"error"}` saying why it could not be read).
-    pub fn document(&self, plate: &metaplate_store::SceneId, software_version: &str, rig: &mut Rig) -> Value {
+    /// wiring (`rig`, as [`crate::rig_config`] gives it, or `{"error"}` saying why it could not be read; `{"error"}`
+    /// too without a rig, when its instruments did not open).
+    pub fn document(&self, plate: &metaplate_store::SceneId, software_version: &str, rig: Option<&mut Rig>) -> Value {
         let mut document = self.to_json();
         if let Some(object) = document.as_object_mut() {
             object.insert("checked_at".into(), json!(chrono::Utc::now().to_rfc3339()));
             object.insert("plate".into(), json!({"name": plate.name, "hash": plate.hash}));
             object.insert("software_version".into(), json!(software_version));
-            let rig = crate::rig_config(rig).unwrap_or_else(|e| json!({"error": e.to_string()}));
+            let rig = match rig {
+                Some(rig) => crate::rig_config(rig).unwrap_or_else(|e| json!({"error": e.to_string()})),
+                None => json!({"error": "the rig's instruments did not all open"}),
+            };
             object.insert("rig".into(), rig);
         }
         document

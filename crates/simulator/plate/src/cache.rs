@@ -31,6 +31,19 @@ use crate::error::PlateError;
 use crate::greens::{GreensFunctions, GreensRequest, SpectralPlan};
 use crate::model::{ModelOptions, PlateModel};
 
+/// Environment variable naming the cache directory outright (first choice of [`default_cache_dir`]).
+pub const CACHE_DIR_ENV: &str = "METAPLATE_CACHE_DIR";
+
+/// The default cache directory from the environment (`var` reads a variable): `$METAPLATE_CACHE_DIR`, else
+/// `$XDG_CACHE_HOME/metaplate`, else `$HOME/.cache/metaplate`; `None` when none is set. Empty values count as
+/// unset, and a relative `XDG_CACHE_HOME` is ignored (the XDG specification says so).
+pub fn default_cache_dir(var: impl Fn(&str) -> Option<std::ffi::OsString>) -> Option<PathBuf> {
+    let set = |name: &str| var(name).filter(|v| !v.is_empty()).map(PathBuf::from);
+    set(CACHE_DIR_ENV)
+        .or_else(|| set("XDG_CACHE_HOME").filter(|p| p.is_absolute()).map(|p| p.join("metaplate")))
+        .or_else(|| set("HOME").map(|p| p.join(".cache").join("metaplate")))
+}
+
 /// Bumped whenever the model's numerics or the entry's format change, so stale entries are not reused (a stale
 /// file has another key, hence another name, and is never read).
 const MODEL_VERSION: u64 = 2;

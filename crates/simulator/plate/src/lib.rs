@@ -82,7 +82,9 @@ mod model;
 mod pattern;
 mod resonators;
 
-pub use cache::{EntrySettings, cache_key, cache_path, greens_functions, greens_functions_within};
+pub use cache::{
+    CACHE_DIR_ENV, EntrySettings, cache_key, cache_path, default_cache_dir, greens_functions, greens_functions_within,
+};
 pub use error::PlateError;
 pub use greens::{ALIAS_DECAY_DB, GreensFunctions, GreensRequest, MAX_GREENS_BYTES, MAX_IR_SAMPLES, SpectralPlan};
 pub use mesh::MAX_LATTICE_POINTS;
