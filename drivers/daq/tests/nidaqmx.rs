@@ -3,26 +3,15 @@
 //! with `ao0`/`ao1` looped back to `ai0`/`ai1`, see that crate). Each test takes its own device: the stand-in's
 //! state is per process, as NI-DAQmx's is, and `cargo test` runs the tests in one process.
 
-use std::path::PathBuf;
 use std::time::Duration;
 
 use metaplate_core::aim::{AimError, MirrorOutputs};
 use metaplate_core::daq::{Daq, DaqChannel, DaqConfig, DaqError};
 use metaplate_daq::{NiDaqmx, NiInput, NiMirrorOutputs, NiOutputWaveform, NiSettings, StartTrigger, TerminalConfig};
-
-/// The stand-in library, built next to this test binary (it is a dev-dependency; `cargo nextest run
-/// --workspace` builds it as a workspace member).
-fn stand_in() -> PathBuf {
-    let name = format!("{}nidaqmx_standin{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX);
-    let exe = std::env::current_exe().unwrap();
-    let deps = exe.parent().unwrap();
-    [deps, deps.parent().unwrap()].iter().map(|dir| dir.join(&name)).find(|p| p.exists()).unwrap_or_else(|| {
-        panic!("{name} is not built next to {}: cargo build -p metaplate-mock-nidaqmx", exe.display())
-    })
-}
+use metaplate_fixtures::nidaqmx_stand_in;
 
 fn settings(device: &str) -> NiSettings {
-    NiSettings { library: Some(stand_in()), read_timeout_s: 2.0, ..NiSettings::new(device) }
+    NiSettings { library: Some(nidaqmx_stand_in()), read_timeout_s: 2.0, ..NiSettings::new(device) }
 }
 
 fn config(inputs: &[u8], range_v: f64, sample_rate_hz: f64, block_len_samples: u32) -> DaqConfig {
@@ -166,7 +155,7 @@ fn a_trigger_that_never_comes_is_a_timeout() {
 
 #[test]
 fn outputs_held_by_the_mirrors_are_reserved() {
-    let lib = Some(stand_in());
+    let lib = Some(nidaqmx_stand_in());
     let mirrors = NiMirrorOutputs::open("Dev7", "ao0", "ao1", 10.0, lib.clone()).unwrap();
     match NiMirrorOutputs::open("Dev7", "ao1", "Dev7/ao0", 10.0, lib).unwrap_err() {
         AimError::Device { message } => {
@@ -185,7 +174,7 @@ fn outputs_held_by_the_mirrors_are_reserved() {
 
 #[test]
 fn mirror_outputs_hold_the_volts_written() {
-    let mut mirrors = NiMirrorOutputs::open("Dev8", "ao0", "ao1", 5.0, Some(stand_in())).unwrap();
+    let mut mirrors = NiMirrorOutputs::open("Dev8", "ao0", "ao1", 5.0, Some(nidaqmx_stand_in())).unwrap();
     assert_eq!(mirrors.describe(), "NI USB-6211 s/n 01A2B3C8 Dev8/ao0, Dev8/ao1");
     assert_eq!(mirrors.limit_v(), 5.0);
     mirrors.set_volts(1.25, -2.5).unwrap();

@@ -2,8 +2,8 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // Tests may unwrap: a panic is the failure report.
 
+mod faults;
 mod galvo;
 mod hardware_file;
-mod serial_faults;
 mod units;
 mod zaber;

@@ -1,21 +1,43 @@
-//! Faults of the serial instruments, opened through the real serial transport on pseudo-terminals the mock
-//! controller and the mock stages answer on: each is named, by the hardware file's section, in the one error that
+//! Instrument faults through the real backends: the Polytec controller and Zaber stages on pseudo-terminals the
+//! mock controller and the mock stages answer on (the real serial transport), NI-DAQmx through the stand-in library
+//! (run-time loading, NI's status codes). Each is named, by the hardware file's section, in the one error that
 //! opening the rig gives (what `metaplate check --hardware` turns into failed checks).
 
-#![cfg(all(unix, feature = "serial", feature = "zaber"))]
-
 use std::path::Path;
-use std::sync::{Arc, Mutex};
 
-use metaplate_core::clock::{RealClock, VirtualClock};
 use metaplate_drivers::{HardwareFile, open_rig};
-use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, PtyServer, UnitSpec, quiet_spec};
-use metaplate_mock_zaber::{ArmedFault, ChainSpec, MockChain};
-use metaplate_zaber_protocol::WarningFlag;
 
 const EXAMPLE: &str = include_str!("../../../crates/cli/hardware.example.toml");
 
+/// The example with its `[daq]` replaced by `daq` (a whole section, header and keys).
+fn with_daq(daq: &str) -> HardwareFile {
+    let start = EXAMPLE.find("[daq]").unwrap();
+    let end = start + EXAMPLE[start..].find("\n[audio]").unwrap();
+    let text = format!("{}{daq}\n{}", &EXAMPLE[..start], &EXAMPLE[end..]);
+    HardwareFile::parse(&text, Path::new("/lab/rig.toml")).unwrap()
+}
+
+/// A DAQmx call that fails when the DAQ opens is named with NI's status code and text: here a device the system
+/// does not have (-200220).
+#[cfg(feature = "nidaqmx")]
+#[test]
+fn a_daqmx_call_that_fails_is_named_with_nis_code() {
+    let library = metaplate_fixtures::nidaqmx_stand_in();
+    let ni = |device: &str| {
+        format!("[daq]\nbackend = \"nidaqmx\"\ndevice = \"{device}\"\nlibrary = \"{}\"\n", library.display())
+    };
+    let error = open_rig(&with_daq(&ni("Dev9"))).err().unwrap();
+    let daq: Vec<String> =
+        error.failed_instruments().into_iter().filter(|(s, _)| *s == "daq").map(|(_, m)| m).collect();
+    assert_eq!(daq.len(), 1, "{error}");
+    assert!(daq[0].contains("Dev9") && daq[0].contains("-200220"), "{}", daq[0]);
+    // Dev7 exists: the DAQ opens, and only the example's absent instruments are named.
+    let error = open_rig(&with_daq(&ni("Dev7"))).err().unwrap();
+    assert!(error.failed_instruments().iter().all(|(s, _)| *s != "daq"), "{error}");
+}
+
 /// The example with its LDV on `ldv_port` asking for `decoder`, and Zaber stages on `zaber_port`.
+#[cfg(all(unix, feature = "serial", feature = "zaber"))]
 fn rig_file(ldv_port: &Path, decoder: &str, zaber_port: &Path) -> HardwareFile {
     let start = EXAMPLE.find("port = ").unwrap();
     let end = start + EXAMPLE[start..].find('\n').unwrap();
@@ -29,8 +51,16 @@ fn rig_file(ldv_port: &Path, decoder: &str, zaber_port: &Path) -> HardwareFile {
     HardwareFile::parse(&text, Path::new("/lab/rig.toml")).unwrap()
 }
 
+#[cfg(all(unix, feature = "serial", feature = "zaber"))]
 #[test]
 fn a_decoder_the_unit_lacks_and_an_axis_that_will_not_home_are_named() {
+    use std::sync::{Arc, Mutex};
+
+    use metaplate_core::clock::{RealClock, VirtualClock};
+    use metaplate_mock_ldv::{FaultSchedule, MockController, MockDevice, PtyServer, UnitSpec, quiet_spec};
+    use metaplate_mock_zaber::{ArmedFault, ChainSpec, MockChain};
+    use metaplate_zaber_protocol::WarningFlag;
+
     // The lab's unit carries a VD-02 only (`UnitSpec::lab_default`).
     let controller = MockController::new(UnitSpec::lab_default(), &quiet_spec(), 11);
     let clock = Arc::new(VirtualClock::new());
