@@ -31,6 +31,17 @@ fn names(report: &Value) -> Vec<&str> {
     report["checks"].as_array().unwrap().iter().map(|c| c["name"].as_str().unwrap()).collect()
 }
 
+/// The names of the checks that failed, in order.
+fn failed(report: &Value) -> Vec<&str> {
+    report["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["passed"] == false)
+        .map(|c| c["name"].as_str().unwrap())
+        .collect()
+}
+
 fn check(report: &'_ Value, name: &str) -> Value {
     report["checks"].as_array().unwrap().iter().find(|c| c["name"] == name).cloned().unwrap()
 }
@@ -99,14 +110,7 @@ fn rig_mistakes_in_a_scene_file_fail_the_check_by_name_with_exit_code_3() {
     assert_eq!(out.status.code(), Some(3), "{}", text(&out.stderr));
     let report: Value = serde_json::from_str(&text(&out.stdout)).unwrap();
     assert_eq!(report["verdict"], "fail");
-    let failed: Vec<&str> = report["checks"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|c| c["passed"] == false)
-        .map(|c| c["name"].as_str().unwrap())
-        .collect();
-    assert_eq!(failed, ["actuator_wiring", "disk"], "{report:#}");
+    assert_eq!(failed(&report), ["actuator_wiring", "disk"], "{report:#}");
     let wiring = check(&report, "actuator_wiring")["message"].as_str().unwrap().to_owned();
     assert!(wiring.contains("actuators 1 and 6 are swapped: channel 1"), "{wiring}");
     let disk = check(&report, "disk")["message"].as_str().unwrap().to_owned();
@@ -120,6 +124,29 @@ fn rig_mistakes_in_a_scene_file_fail_the_check_by_name_with_exit_code_3() {
         "{}",
         text(&out.stderr)
     );
+}
+
+/// The U6's stream overflows during the loopback sweep (the scene's `daq_overrun` fault: the mock U6 reports
+/// errorcodes 59 and 60 to the real U6 driver): the loopback fails naming the overflow, and what needs the loopback
+/// is not run.
+#[test]
+fn a_daq_stream_overflow_fails_the_loopback_by_name() {
+    let dir = common::scratch("check", "overflow");
+    let scene = dir.join("overflowing.toml");
+    let resolved =
+        Command::new(env!("CARGO_BIN_EXE_metaplate")).args(["scene", "show", "metamaterial"]).output().unwrap();
+    assert!(resolved.status.success(), "{}", text(&resolved.stderr));
+    let faulty = format!(
+        "{}\n[[faults]]\nkind = \"daq_overrun\"\nat_s = 0.0\nduration_s = 2.0\n",
+        text(&resolved.stdout).replace("faults = []\n", "")
+    );
+    std::fs::write(&scene, faulty).unwrap();
+    let out = metaplate(&["check", "--scene", scene.to_str().unwrap(), "--grid", "7x5", "--json"]);
+    assert_eq!(out.status.code(), Some(3), "{}", text(&out.stderr));
+    let report: Value = serde_json::from_str(&text(&out.stdout)).unwrap();
+    assert_eq!(failed(&report), ["loopback", "clocks", "actuator_wiring"], "{report:#}");
+    let loopback = check(&report, "loopback")["message"].as_str().unwrap().to_owned();
+    assert!(loopback.contains("the DAQ's stream overflowed") && loopback.contains("U6"), "{loopback}");
 }
 
 /// The LDV answers over a pseudo-terminal through the real `serialport` transport (the `serial` backend), against

@@ -12,6 +12,9 @@
 //!   file, the key and the reason, or the backend this build lacks and how to get it.
 //! - [`open_rig`]: the [`Rig`](metaplate_core::rig::Rig) a hardware file names, on the real clock, and the keypad
 //!   beside it ([`OpenedRig`]); [`open_plate_rig`] also reads the file's plate and checks the wiring against it.
+//!   Every instrument is tried whatever became of the others: one error names each that failed
+//!   ([`HardwareError::Devices`], [`HardwareError::failed_instruments`]), which `metaplate check` reports as a
+//!   failed check per instrument.
 //! - [`listing`]: what is connected, per backend ([`list_connected`], what `metaplate devices` prints), and a
 //!   hardware file drafted from it ([`draft_hardware_file`]).
 //!

@@ -153,6 +153,15 @@ impl<'a> Bench<'a> {
             let _ = self.rig.daq.stop();
         }
         let recording = result.map_err(|e| e.to_string())?;
+        if recording.daq_overrun {
+            return Err(format!(
+                "the DAQ's stream overflowed: its buffer filled before the host read it and samples were lost at \
+                 the source (the {} {} reports it). Close what else uses the computer or the USB bus, or plug the DAQ into \
+                 a port of its own",
+                self.rig.daq.identity().vendor,
+                self.rig.daq.identity().model
+            ));
+        }
         if recording.gap || recording.underruns > 0 {
             return Err(format!(
                 "the recording has a gap ({} underruns, gap {}): USB or audio buffers too small?",

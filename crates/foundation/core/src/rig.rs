@@ -99,6 +99,10 @@ pub struct Recording {
     pub clipped: bool,
     /// Samples were lost (packets lost, samples missing, overrun): the recording has a gap.
     pub gap: bool,
+    /// The DAQ reported that its buffer overflowed (samples dropped at the source, before the host read them): one
+    /// cause of a [`Recording::gap`], named apart because its remedy differs (a host or bus too busy to read in
+    /// time, not a lost packet).
+    pub daq_overrun: bool,
     /// Audio underruns during the playback.
     pub underruns: u32,
 }
@@ -158,7 +162,7 @@ impl Rig {
         }
         let mut velocity_v = Vec::with_capacity(record_samples);
         let mut loopback_v = Vec::with_capacity(record_samples);
-        let (mut clipped, mut gap) = (false, false);
+        let (mut clipped, mut gap, mut daq_overrun) = (false, false, false);
         while velocity_v.len() < record_samples {
             let block = self.daq.read_block()?;
             let [velocity, loopback, ..] = block.volts.as_slice() else {
@@ -166,6 +170,7 @@ impl Rig {
             };
             clipped |= block.integrity.clipped;
             gap |= !block.integrity.is_contiguous();
+            daq_overrun |= block.integrity.overrun;
             velocity_v.extend_from_slice(velocity);
             loopback_v.extend_from_slice(loopback);
         }
@@ -173,6 +178,6 @@ impl Rig {
         loopback_v.truncate(record_samples);
         let report = self.audio.finish()?;
         self.daq.stop()?;
-        Ok(Recording { velocity_v, loopback_v, clipped, gap, underruns: report.underruns })
+        Ok(Recording { velocity_v, loopback_v, clipped, gap, daq_overrun, underruns: report.underruns })
     }
 }
