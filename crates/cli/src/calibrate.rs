@@ -24,11 +24,18 @@ pub struct CalibrateArgs {
 pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     let common = &args.run;
     run::init_log(&common.out, "calibrate")?;
-    let Opened { plate, mut rig, lab: _lab, .. } = rig::open(&common.source, |plate| {
-        let points = Some(plate.driving_points());
-        let galvo_fit = common.galvo_fit()?;
-        Ok(LabOptions { seed: common.seed, cache_dir: common.cache.dir(), points, galvo_fit, ..LabOptions::default() })
-    })?;
+    let Opened { plate, mut rig, lab: _lab, .. } =
+        rig::open(&common.source, metaplate_drivers::OpenPurpose::Measure, |plate| {
+            let points = Some(plate.driving_points());
+            let galvo_fit = common.galvo_fit()?;
+            Ok(LabOptions {
+                seed: common.seed,
+                cache_dir: common.cache.dir(),
+                points,
+                galvo_fit,
+                ..LabOptions::default()
+            })
+        })?;
     let config = CalibrationConfig { seed: common.seed.unwrap_or(plate.scene.seed), ..CalibrationConfig::default() };
     let control = RunControl::new();
     let mut reporter = Reporter::new("calibrate", "actuators", common);

@@ -71,7 +71,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     if !(args.keypad_wait_s.is_finite() && args.keypad_wait_s >= 0.0) {
         anyhow::bail!("--keypad-wait-s {} must be finite and >= 0", args.keypad_wait_s);
     }
-    let opened = rig::open(&args.source, |plate| {
+    let opened = rig::open(&args.source, metaplate_drivers::OpenPurpose::Check, |plate| {
         let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
         // A small plan is prepared whole (shared with a scan of it); a large one: the LDV points only.
         let points = plate
@@ -124,8 +124,9 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     finish(args, &plate.id, &report, Some(&mut rig))
 }
 
-/// A hardware file whose instruments did not all open: each that failed is a failed check of its name (every
-/// fault at once), and the verdict `fail`. Any other error (the file, its plate, a missing backend) is returned.
+/// A hardware file whose instruments did not all open: each that failed (a device, or a value of the file that only
+/// opening checks) is a failed check of its name, every one at once, and the verdict `fail`. Any other error (the
+/// file as read, its plate, a backend this build lacks) is returned.
 fn unopened(args: &CheckArgs, error: anyhow::Error) -> anyhow::Result<()> {
     let failed = error.downcast_ref::<HardwareError>().map(HardwareError::failed_instruments).unwrap_or_default();
     let (Some(file), false) = (&args.source.hardware, failed.is_empty()) else { return Err(error) };

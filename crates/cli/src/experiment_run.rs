@@ -65,7 +65,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let runner = SessionRunner::new(&experiment, &args.participant, &dataset, drive, &args.out, args.seed, args.force)?;
     let (mut rig, lab, keypad) = match (&args.source.scene, &args.source.hardware) {
         (_, Some(file)) => {
-            let (plate, opened) = rig::hardware_rig_and_keypad(file)?;
+            let (plate, opened) = rig::hardware_rig_and_keypad(file, metaplate_drivers::OpenPurpose::Play)?;
             check_playable(&dataset, &plate.id)?;
             (opened.rig, None, opened.keypad)
         }

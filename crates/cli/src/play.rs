@@ -53,7 +53,7 @@ pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
     let specs: Vec<PixelSpec> = args.pixels.iter().map(|p| parse_pixel(p)).collect::<Result<_, _>>()?;
     let (plate, mut rig, _lab) = match (&args.source.scene, &args.source.hardware) {
         (_, Some(file)) => {
-            let (plate, opened) = rig::hardware_rig_and_keypad(file)?;
+            let (plate, opened) = rig::hardware_rig_and_keypad(file, metaplate_drivers::OpenPurpose::Play)?;
             check_playable(&dataset, &plate.id)?;
             (plate, opened.rig, None)
         }

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use metaplate_core::rig::Rig;
 use metaplate_core::scene::Scene;
-use metaplate_drivers::OpenedRig;
+use metaplate_drivers::{OpenPurpose, OpenedRig};
 use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::ScanPoints;
 use metaplate_store::SceneId;
@@ -89,8 +89,8 @@ pub fn mock_rig_with(plate: &Plate, options: &LabOptions) -> anyhow::Result<(Moc
 ///
 /// # Errors
 /// The file, its plate, a backend this build lacks, or the instruments that cannot be opened.
-pub fn hardware_rig_and_keypad(path: &Path) -> anyhow::Result<(Plate, OpenedRig)> {
-    let (scene, opened) = metaplate_drivers::open_plate_rig(path)?;
+pub fn hardware_rig_and_keypad(path: &Path, purpose: OpenPurpose) -> anyhow::Result<(Plate, OpenedRig)> {
+    let (scene, opened) = metaplate_drivers::open_plate_rig(path, purpose)?;
     Ok((Plate::of(scene), opened))
 }
 
@@ -106,15 +106,19 @@ pub struct Opened {
     pub lab: Option<MockLab>,
 }
 
-/// Opens the rig of `source`: the hardware file's instruments, or the mock lab of the scene with the options
+/// Opens the rig of `source`: the hardware file's instruments (as far as `purpose` asks), or the mock lab of the scene with the options
 /// `lab_options` gives for its plate (which points it prepares, its seed and cache).
 ///
 /// # Errors
 /// The plate's, the file's, the lab's or an instrument's error.
-pub fn open(source: &Source, lab_options: impl FnOnce(&Plate) -> anyhow::Result<LabOptions>) -> anyhow::Result<Opened> {
+pub fn open(
+    source: &Source,
+    purpose: OpenPurpose,
+    lab_options: impl FnOnce(&Plate) -> anyhow::Result<LabOptions>,
+) -> anyhow::Result<Opened> {
     match (&source.scene, &source.hardware) {
         (_, Some(file)) => {
-            let (plate, opened) = hardware_rig_and_keypad(file)?;
+            let (plate, opened) = hardware_rig_and_keypad(file, purpose)?;
             Ok(Opened { plate, rig: opened.rig, keypad: opened.keypad, lab: None })
         }
         (Some(scene), None) => {

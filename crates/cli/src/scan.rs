@@ -53,13 +53,14 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     let common = &args.run;
     let protocol = ExcitationProtocol::by_name(&args.protocol)?;
     run::init_log(&common.out, "scan")?;
-    let Opened { plate, mut rig, lab: _lab, .. } = rig::open(&common.source, |plate| {
-        let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
-        let points = plate.small_plan_points(&plan).unwrap_or(plan.points);
-        let galvo_fit = common.galvo_fit()?;
-        let cache_dir = common.cache.dir();
-        Ok(LabOptions { seed: common.seed, cache_dir, points: Some(points), galvo_fit, ..Default::default() })
-    })?;
+    let Opened { plate, mut rig, lab: _lab, .. } =
+        rig::open(&common.source, metaplate_drivers::OpenPurpose::Measure, |plate| {
+            let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
+            let points = plate.small_plan_points(&plan).unwrap_or(plan.points);
+            let galvo_fit = common.galvo_fit()?;
+            let cache_dir = common.cache.dir();
+            Ok(LabOptions { seed: common.seed, cache_dir, points: Some(points), galvo_fit, ..Default::default() })
+        })?;
     let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
     let actuators = rig.wiring.actuator_channels.len();
     let load = |dir: &PathBuf| {

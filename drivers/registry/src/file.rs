@@ -43,7 +43,7 @@ pub enum HardwareError {
     /// An instrument could not be opened.
     #[error("cannot open the {device} `{name}` ({backend}): {detail}")]
     Device {
-        /// Which instrument (`LDV`, `DAQ`, `audio interface`, `keypad`).
+        /// Which instrument (`LDV`, `DAQ`, `audio interface`, `keypad`, `aimer`).
         device: &'static str,
         /// Its backend.
         backend: &'static str,
@@ -52,8 +52,8 @@ pub enum HardwareError {
         /// The driver's error.
         detail: String,
     },
-    /// Several instruments could not be opened (each tried whatever the others did): each one's error, in the order
-    /// LDV, DAQ, audio interface, keypad, aim.
+    /// One or more instruments could not be opened: each one's error, in the order LDV, DAQ, audio interface,
+    /// keypad, aim (for a check every one is tried; otherwise opening stops at the first, [`crate::OpenPurpose`]).
     #[error("{}", failures.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))]
     Devices {
         /// Each instrument's error ([`HardwareError::Device`], or [`HardwareError::File`] for a file it names).

@@ -94,5 +94,5 @@ pub use file::{
 };
 pub use listing::{Listing, draft_hardware_file, list_connected, listings_json, listings_text};
 pub use nidaqmx::{NidaqmxDaq, NidaqmxInput};
-pub use open::{OpenedRig, open_galvo_outputs, open_plate_rig, open_rig};
+pub use open::{OpenPurpose, OpenedRig, open_galvo_outputs, open_plate_rig, open_rig};
 pub use zaber::{ZaberAim, ZaberAimAxis};

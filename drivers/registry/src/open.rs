@@ -13,6 +13,21 @@ use crate::aim::{AimSection, MirrorOutputsSection};
 use crate::backends::{self, Capability};
 use crate::file::{AudioSection, DaqSection, HardwareError, HardwareFile, KeypadSection, LdvSection};
 
+/// Why a rig is opened, which sets how far opening goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OpenPurpose {
+    /// `metaplate check`: every instrument is tried whatever became of the others (one attempt names every fault;
+    /// stages may home even when another instrument failed), the vibrometer connected and the galvo fit held to
+    /// its residual limit.
+    Check,
+    /// A measurement (calibrate, scan): the vibrometer connected and the galvo fit held to its limit; opening stops
+    /// at the first instrument that fails, before anything after it moves.
+    Measure,
+    /// Playing stimuli (play, experiments), which neither reads the vibrometer nor aims: it is opened without being
+    /// connected, the fit is not held to its limit, and opening stops at the first failure.
+    Play,
+}
+
 /// What a hardware file opens: the rig the recipes drive, and the keypad beside it (not a capability of [`Rig`]:
 /// no recipe reads it yet).
 pub struct OpenedRig {
@@ -35,7 +50,7 @@ impl std::fmt::Debug for OpenedRig {
 /// # Errors
 /// [`HardwareError::File`] and the others of [`open_rig`]; [`HardwareError::Scene`] for the plate's scene;
 /// [`HardwareError::Plate`] when the wiring does not fit it.
-pub fn open_plate_rig(path: &Path) -> Result<(Scene, OpenedRig), HardwareError> {
+pub fn open_plate_rig(path: &Path, purpose: OpenPurpose) -> Result<(Scene, OpenedRig), HardwareError> {
     let file = HardwareFile::load(path)?;
     let scene = Scene::resolve(&file.plate)?;
     scene.validate()?;
@@ -48,19 +63,26 @@ pub fn open_plate_rig(path: &Path) -> Result<(Scene, OpenedRig), HardwareError> 
         );
         return Err(HardwareError::Plate { path: path.to_path_buf(), reason });
     }
-    Ok((scene, open_rig(&file)?))
+    Ok((scene, open_rig(&file, purpose)?))
 }
 
 /// Opens every instrument `file` names, in the order LDV, DAQ, audio interface (configured once at the file's
 /// rate and channel count, so that a missing card is found now rather than at the first point), keypad, aim; on
-/// the real clock. Each is tried whatever became of the others, so that one attempt names every fault.
+/// the real clock, as far as `purpose` asks ([`OpenPurpose`]: for a check, each is tried whatever became of the
+/// others, so that one attempt names every fault).
 ///
 /// # Errors
-/// [`HardwareError::NotInThisBuild`] for the first backend this build lacks, before anything is opened;
-/// [`HardwareError::Devices`] naming each instrument that cannot be opened
-/// ([`HardwareError::failed_instruments`]).
-pub fn open_rig(file: &HardwareFile) -> Result<OpenedRig, HardwareError> {
-    for (capability, name) in file.backends() {
+/// [`HardwareError::NotInThisBuild`] for the first backend this build lacks (the galvo mirrors' outputs too),
+/// before anything is opened; [`HardwareError::Devices`] naming each instrument that could not be opened
+/// ([`HardwareError::failed_instruments`]; the first only, unless for a check).
+pub fn open_rig(file: &HardwareFile, purpose: OpenPurpose) -> Result<OpenedRig, HardwareError> {
+    let mut named = file.backends();
+    if let Some(AimSection::Galvo(galvo)) = &file.aim {
+        match &galvo.outputs {
+            MirrorOutputsSection::Nidaqmx(_) => named.push((Capability::Daq, "nidaqmx")),
+        }
+    }
+    for (capability, name) in named {
         if let Some(backend) = backends::find(capability, name)
             && let Some(reason) = backend.missing_reason()
         {
@@ -73,20 +95,35 @@ pub fn open_rig(file: &HardwareFile) -> Result<OpenedRig, HardwareError> {
         }
     }
     let clock: Arc<dyn Clock> = Arc::new(RealClock::new());
-    fn kept<T>(failures: &mut Vec<HardwareError>, result: Result<T, HardwareError>) -> Option<T> {
-        result.map_err(|e| failures.push(e)).ok()
+    // After a failure, a measurement or a playback opens nothing more (the stages would home for nothing).
+    let every = purpose == OpenPurpose::Check;
+    let measuring = purpose != OpenPurpose::Play;
+    fn kept<T>(
+        failures: &mut Vec<HardwareError>,
+        every: bool,
+        open: impl FnOnce() -> Result<T, HardwareError>,
+    ) -> Option<T> {
+        if !every && !failures.is_empty() {
+            return None;
+        }
+        open().map_err(|e| failures.push(e)).ok()
     }
     let mut failures = Vec::new();
-    let vibrometer = kept(&mut failures, open_ldv(&file.ldv));
-    let daq = kept(&mut failures, open_daq(&file.daq, &file.path));
-    let audio = kept(&mut failures, open_audio(&file.audio));
-    let keypad = kept(&mut failures, file.keypad.as_ref().map(|keypad| open_keypad(keypad, &clock)).transpose());
-    let aim = kept(&mut failures, open_aim(file, &clock));
+    let vibrometer = kept(&mut failures, every, || open_ldv(&file.ldv, measuring));
+    let daq = kept(&mut failures, every, || open_daq(&file.daq, &file.path));
+    let audio = kept(&mut failures, every, || open_audio(&file.audio));
+    let keypad =
+        kept(&mut failures, every, || file.keypad.as_ref().map(|keypad| open_keypad(keypad, &clock)).transpose());
+    let aim = kept(&mut failures, every, || open_aim(file, &clock, measuring));
     match (vibrometer, daq, audio, keypad, aim) {
         (Some(vibrometer), Some(daq), Some(audio), Some(keypad), Some(aim)) => {
             Ok(OpenedRig { rig: Rig { vibrometer, aim, daq, audio, clock, wiring: file.wiring() }, keypad })
         }
-        _ => Err(HardwareError::Devices { failures }),
+        // A backend missing from this build is the build's error, not an instrument's.
+        _ => match failures.iter().position(|e| matches!(e, HardwareError::NotInThisBuild { .. })) {
+            Some(at) => Err(failures.swap_remove(at)),
+            None => Err(HardwareError::Devices { failures }),
+        },
     }
 }
 
@@ -102,7 +139,12 @@ fn not_built(capability: Capability, backend: &'static str, name: &str) -> Hardw
     device(capability, backend, name, "this build of metaplate lacks the backend")
 }
 
-fn open_ldv(section: &LdvSection) -> Result<Box<dyn metaplate_core::vibrometer::Vibrometer + Send>, HardwareError> {
+/// The vibrometer; `connect`: a Polytec controller is connected now (identity, the decoder asked for, its
+/// ranges), so that one that does not answer, or lacks the decoder, is named when the rig opens.
+fn open_ldv(
+    section: &LdvSection,
+    connect: bool,
+) -> Result<Box<dyn metaplate_core::vibrometer::Vibrometer + Send>, HardwareError> {
     match section {
         LdvSection::Polytec(polytec) => {
             let name = polytec.port.display().to_string();
@@ -113,13 +155,16 @@ fn open_ldv(section: &LdvSection) -> Result<Box<dyn metaplate_core::vibrometer::
                 let config = polytec.config().map_err(|e| error(&e))?;
                 let line = SerialPortLine::open(polytec.selector()).map_err(|e| error(&e))?;
                 let mut driver = PolytecDriver::new(line, RetryPolicy::default(), config).map_err(|e| error(&e))?;
-                // Connect now (identity, the decoder asked for and its ranges): a controller that does not answer,
-                // or lacks the decoder, is named when the rig opens rather than at the first point.
-                driver.decoder().map_err(|e| error(&e))?;
+                if connect {
+                    driver.decoder().map_err(|e| error(&e))?;
+                }
                 Ok(Box::new(driver))
             }
             #[cfg(not(feature = "serial"))]
-            Err(not_built(Capability::Vibrometer, "polytec", &name))
+            {
+                let _ = connect;
+                Err(not_built(Capability::Vibrometer, "polytec", &name))
+            }
         }
         LdvSection::Analog(analog) => {
             let ldv =
@@ -250,9 +295,9 @@ pub fn open_galvo_outputs(file: &HardwareFile) -> Result<(Box<dyn MirrorOutputs>
     }
 }
 
-/// The aimer `[aim]` names, or [`NoAimer`] naming the section to add: the galvo fit is read and checked now, the
-/// outputs opened.
-fn open_aim(file: &HardwareFile, clock: &Arc<dyn Clock>) -> Result<Box<dyn Aim + Send>, HardwareError> {
+/// The aimer `[aim]` names, or [`NoAimer`] naming the section to add: the galvo fit is read and checked now
+/// (held to `max_residual_mm` when `hold_fit`), the outputs opened.
+fn open_aim(file: &HardwareFile, clock: &Arc<dyn Clock>, hold_fit: bool) -> Result<Box<dyn Aim + Send>, HardwareError> {
     if let Some(AimSection::Zaber(zaber)) = &file.aim {
         use crate::zaber::OpenFailure;
         return zaber.open().map_err(|failure| match failure {
@@ -276,7 +321,7 @@ fn open_aim(file: &HardwareFile, clock: &Arc<dyn Clock>) -> Result<Box<dyn Aim +
         reason: e.to_string(),
     })?;
     let residual = fit.residual();
-    if residual.max_mm > galvo.max_residual_mm {
+    if hold_fit && residual.max_mm > galvo.max_residual_mm {
         let detail = format!(
             "the taught fit's residual, {:.3} mm at mark {}, is over aim.max_residual_mm = {} mm: teach the marks \
              again (`metaplate aim teach`)",

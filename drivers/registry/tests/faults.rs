@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use metaplate_drivers::{HardwareFile, open_rig};
+use metaplate_drivers::{HardwareFile, OpenPurpose, open_rig};
 
 const EXAMPLE: &str = include_str!("../../../crates/cli/hardware.example.toml");
 
@@ -19,25 +19,26 @@ fn with_daq(daq: &str) -> HardwareFile {
 
 /// A DAQmx call that fails when the DAQ opens is named with NI's status code and text: here a device the system
 /// does not have (-200220).
-#[cfg(feature = "nidaqmx")]
+#[cfg(all(feature = "nidaqmx", feature = "serial", feature = "alsa", target_os = "linux"))]
 #[test]
 fn a_daqmx_call_that_fails_is_named_with_nis_code() {
     let library = metaplate_fixtures::nidaqmx_stand_in();
     let ni = |device: &str| {
         format!("[daq]\nbackend = \"nidaqmx\"\ndevice = \"{device}\"\nlibrary = \"{}\"\n", library.display())
     };
-    let error = open_rig(&with_daq(&ni("Dev9"))).err().unwrap();
+    let error = open_rig(&with_daq(&ni("Dev9")), OpenPurpose::Check).err().unwrap();
     let daq: Vec<String> =
         error.failed_instruments().into_iter().filter(|(s, _)| *s == "daq").map(|(_, m)| m).collect();
     assert_eq!(daq.len(), 1, "{error}");
     assert!(daq[0].contains("Dev9") && daq[0].contains("-200220"), "{}", daq[0]);
     // Dev7 exists: the DAQ opens, and only the example's absent instruments are named.
-    let error = open_rig(&with_daq(&ni("Dev7"))).err().unwrap();
-    assert!(error.failed_instruments().iter().all(|(s, _)| *s != "daq"), "{error}");
+    let error = open_rig(&with_daq(&ni("Dev7")), OpenPurpose::Check).err().unwrap();
+    let sections: Vec<&str> = error.failed_instruments().iter().map(|(s, _)| *s).collect();
+    assert_eq!(sections, ["ldv", "audio"], "{error}");
 }
 
 /// The example with its LDV on `ldv_port` asking for `decoder`, and Zaber stages on `zaber_port`.
-#[cfg(all(unix, feature = "serial", feature = "zaber"))]
+#[cfg(all(feature = "serial", feature = "zaber", feature = "labjack-u6", feature = "alsa", target_os = "linux"))]
 fn rig_file(ldv_port: &Path, decoder: &str, zaber_port: &Path) -> HardwareFile {
     let start = EXAMPLE.find("port = ").unwrap();
     let end = start + EXAMPLE[start..].find('\n').unwrap();
@@ -51,7 +52,7 @@ fn rig_file(ldv_port: &Path, decoder: &str, zaber_port: &Path) -> HardwareFile {
     HardwareFile::parse(&text, Path::new("/lab/rig.toml")).unwrap()
 }
 
-#[cfg(all(unix, feature = "serial", feature = "zaber"))]
+#[cfg(all(feature = "serial", feature = "zaber", feature = "labjack-u6", feature = "alsa", target_os = "linux"))]
 #[test]
 fn a_decoder_the_unit_lacks_and_an_axis_that_will_not_home_are_named() {
     use std::sync::{Arc, Mutex};
@@ -72,7 +73,7 @@ fn a_decoder_the_unit_lacks_and_an_axis_that_will_not_home_are_named() {
     assert!(chain.lock().unwrap().arm_fault(2, 1, stall));
     let stages = PtyServer::spawn(chain).unwrap();
 
-    let error = open_rig(&rig_file(ldv.path(), "VD-09", stages.path())).err().unwrap();
+    let error = open_rig(&rig_file(ldv.path(), "VD-09", stages.path()), OpenPurpose::Check).err().unwrap();
     let failed = error.failed_instruments();
     let message = |section: &str| {
         failed.iter().find(|(s, _)| *s == section).map(|(_, m)| m.clone()).unwrap_or_else(|| panic!("{error}"))

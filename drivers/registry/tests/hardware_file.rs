@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use metaplate_drivers::{
-    BACKENDS, Capability, DaqSection, HardwareError, HardwareFile, KeypadSection, backends, open_rig,
+    BACKENDS, Capability, DaqSection, HardwareError, HardwareFile, KeypadSection, OpenPurpose, backends, open_rig,
 };
 
 const EXAMPLE: &str = include_str!("../../../crates/cli/hardware.example.toml");
@@ -229,7 +229,7 @@ fn a_backend_missing_from_this_build_is_named() {
     let Some(first) = missing.first() else {
         return; // This build has every backend the example names: nothing to refuse.
     };
-    match open_rig(&file) {
+    match open_rig(&file, OpenPurpose::Check) {
         Err(error @ HardwareError::NotInThisBuild { .. }) => {
             let message = error.to_string();
             assert!(message.contains(first.name) && message.contains(&first.missing_reason().unwrap()), "{message}");
@@ -266,7 +266,7 @@ fn every_instrument_that_cannot_be_opened_is_named_in_one_error() {
         let end = start + text[start..].find('\n').unwrap();
         format!("{}port = \"{missing}\"{}", &text[..start], &text[end..])
     });
-    let error = metaplate_drivers::open_plate_rig(&path).err().unwrap();
+    let error = metaplate_drivers::open_plate_rig(&path, OpenPurpose::Check).err().unwrap();
     let HardwareError::Devices { failures } = &error else { panic!("{error:?}") };
     assert!(matches!(failures[0], HardwareError::Device { device: "LDV", .. }), "{failures:?}");
     let failed = error.failed_instruments();
@@ -276,15 +276,21 @@ fn every_instrument_that_cannot_be_opened_is_named_in_one_error() {
     assert!(failed[1].1.contains("360012345") && failed[2].1.contains("hw:CARD=24Ao"), "{error}");
     let message = error.to_string();
     assert!(failed.iter().all(|(_, m)| message.contains(m.as_str())), "one message names them all: {message}");
+    // A measurement or a playback stops at the first instrument that fails: nothing after it is opened.
+    for purpose in [OpenPurpose::Measure, OpenPurpose::Play] {
+        let first = metaplate_drivers::open_plate_rig(&path, purpose).err().unwrap();
+        let sections: Vec<&str> = first.failed_instruments().iter().map(|(s, _)| *s).collect();
+        assert_eq!(sections, ["ldv"], "{purpose:?}: {first}");
+    }
     // An error of the file opens nothing, so it names no instrument.
     let (_bad, bad) = edited(|text| text.replace("[ldv]", "[ldv_typo]"));
-    assert!(metaplate_drivers::open_plate_rig(&bad).err().unwrap().failed_instruments().is_empty());
+    assert!(metaplate_drivers::open_plate_rig(&bad, OpenPurpose::Check).err().unwrap().failed_instruments().is_empty());
 }
 
 #[test]
 fn a_wiring_that_does_not_fit_the_plate_is_refused_before_opening_anything() {
     let (_dir, path) = edited(|text| text.replace("[0, 1, 2, 3, 4, 5, 6, 7]", "[0, 1, 2, 3, 4, 5, 6]"));
-    let error = metaplate_drivers::open_plate_rig(&path).err().unwrap();
+    let error = metaplate_drivers::open_plate_rig(&path, OpenPurpose::Check).err().unwrap();
     let message = error.to_string();
     assert!(message.contains("lists 7 actuators") && message.contains("has 8"), "{message}");
 }
