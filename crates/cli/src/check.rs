@@ -109,7 +109,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     }
     let mut print = |c: &CheckOutcome| {
         if !json_out {
-            eprintln!("  {} {}: {}", if c.passed { "ok  " } else { "FAIL" }, c.name, c.message);
+            eprintln!("{}", c.line());
         }
     };
     let mut report = preflight(&mut rig, &config, &mut print)?;
@@ -133,7 +133,7 @@ fn unopened(args: &CheckArgs, error: anyhow::Error) -> anyhow::Result<()> {
     let plate = rig::Plate::resolve(&HardwareFile::load(file)?.plate)?;
     let report = PreflightReport::unopened(&failed);
     for c in report.checks.iter().filter(|_| !args.json) {
-        eprintln!("  {} {}: {}", if c.passed { "ok  " } else { "FAIL" }, c.name, c.message);
+        eprintln!("{}", c.line());
     }
     finish(args, &plate.id, &report, None)
 }

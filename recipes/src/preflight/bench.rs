@@ -154,12 +154,12 @@ impl<'a> Bench<'a> {
         }
         let recording = result.map_err(|e| e.to_string())?;
         if recording.daq_overrun {
+            let daq = self.rig.daq.identity();
             return Err(format!(
                 "the DAQ's stream overflowed: its buffer filled before the host read it and samples were lost at \
-                 the source (the {} {} reports it). Close what else uses the computer or the USB bus, or plug the DAQ into \
-                 a port of its own",
-                self.rig.daq.identity().vendor,
-                self.rig.daq.identity().model
+                 the source (the {} {} reports it). Close what else uses the computer or the USB bus, or plug the \
+                 DAQ into a port of its own",
+                daq.vendor, daq.model
             ));
         }
         if recording.gap || recording.underruns > 0 {

@@ -61,6 +61,10 @@ pub const MAX_PEAK_FRACTION: f64 = 0.5;
 /// A peak velocity below this fraction of the full scale fails: the response would use a handful of the DAQ's codes.
 pub const MIN_PEAK_FRACTION: f64 = 1e-3;
 
+/// The checks that use the instruments, in order: not run when the wiring is invalid or an instrument did not open.
+const INSTRUMENT_CHECKS: [&str; 7] =
+    ["vibrometer", "daq", "audio", "loopback", "clocks", "actuator_wiring", "ldv_signal"];
+
 /// Disk space a run needs beyond its estimated size, as a factor (the journal, the log, a compaction's copy).
 pub const DISK_MARGIN: f64 = 1.25;
 
@@ -150,6 +154,11 @@ impl CheckOutcome {
         Self::fail(name, format!("not run: it needs {needs} to pass first"), json!({}))
     }
 
+    /// The outcome as `metaplate check` prints it: `  ok   name: message` or `  FAIL name: message`.
+    pub fn line(&self) -> String {
+        format!("  {} {}: {}", if self.passed { "ok  " } else { "FAIL" }, self.name, self.message)
+    }
+
     /// The outcome as JSON: `{"name", "passed", "message", "details"}`.
     pub fn to_json(&self) -> Value {
         json!({"name": self.name, "passed": self.passed, "message": self.message, "details": self.details})
@@ -194,23 +203,16 @@ impl PreflightReport {
     /// its hardware file's section (`ldv`, `daq`, `audio`, `aim`, `keypad`), fails the check of its name (`ldv`'s is
     /// `vibrometer`; the others' are the section's), and every instrument check of [`preflight`] not already named
     /// is not run. The verdict is `fail`.
-    pub fn unopened(failed: &[(&str, String)]) -> Self {
-        let name_of = |section: &str| match section {
-            "ldv" => "vibrometer",
-            "daq" => "daq",
-            "audio" => "audio",
-            "keypad" => "keypad",
-            "aim" => "aim",
-            _ => "rig",
-        };
+    pub fn unopened(failed: &[(&'static str, String)]) -> Self {
+        let name_of = |section: &'static str| if section == "ldv" { "vibrometer" } else { section };
         let mut checks: Vec<CheckOutcome> = failed
             .iter()
             .map(|(section, message)| {
-                CheckOutcome::fail(name_of(section), message.clone(), json!({"section": section}))
+                CheckOutcome::fail(name_of(*section), message.clone(), json!({"section": section}))
             })
             .collect();
         let needs = "the instruments of the hardware file (every one opened)";
-        for name in ["vibrometer", "daq", "audio", "loopback", "clocks", "actuator_wiring", "ldv_signal"] {
+        for name in INSTRUMENT_CHECKS {
             if !checks.iter().any(|c| c.name == name) {
                 checks.push(CheckOutcome::not_run(name, needs));
             }
@@ -259,7 +261,7 @@ pub fn preflight(
     let wiring_ok = wiring.passed;
     record(wiring, &mut report);
     if !wiring_ok {
-        for name in ["vibrometer", "daq", "audio", "loopback", "clocks", "actuator_wiring", "ldv_signal"] {
+        for name in INSTRUMENT_CHECKS {
             record(CheckOutcome::not_run(name, "a valid wiring"), &mut report);
         }
     } else {
