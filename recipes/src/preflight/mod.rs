@@ -208,7 +208,7 @@ impl PreflightReport {
         let mut checks: Vec<CheckOutcome> = failed
             .iter()
             .map(|(section, message)| {
-                CheckOutcome::fail(name_of(*section), message.clone(), json!({"section": section}))
+                CheckOutcome::fail(name_of(section), message.clone(), json!({"section": section}))
             })
             .collect();
         let needs = "the instruments of the hardware file (every one opened)";
