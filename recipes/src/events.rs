@@ -226,6 +226,30 @@ impl<F: FnMut(&Event)> Observer for F {
     }
 }
 
+impl Event {
+    /// Logs this event of `recipe`'s run (target `metaplate::run`, which the monitor reads): the start, commits,
+    /// retries, recoveries, the end; not phases (a moment, not news).
+    pub fn log(&self, recipe: &str) {
+        match self {
+            Event::Started { total, done, dataset, config_hash, .. } => {
+                tracing::info!(total, done, dataset = %dataset.display(), config_hash, "{recipe} started")
+            }
+            Event::Committed { unit, done, total, snr_db, status, clock_s, .. } => {
+                tracing::info!(unit, done, total, ?snr_db, status = %status, clock_s, "committed")
+            }
+            Event::Phase { .. } => {}
+            Event::Retry { unit, attempt, reason } => tracing::info!(unit, attempt, %reason, "retry"),
+            Event::Recovered { detail } => tracing::warn!(%detail, "recovered"),
+            Event::Paused { detail } => tracing::warn!(%detail, "paused, polling"),
+            Event::ReferenceChecked { point, actuator, deviation_db, limit_db } => {
+                tracing::info!(point, actuator, deviation_db, limit_db, "reference point re-measured")
+            }
+            Event::Stopped { done } => tracing::info!(done, "stopped on request"),
+            Event::Finished { done } => tracing::info!(done, "finished"),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

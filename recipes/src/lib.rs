@@ -127,6 +127,6 @@ pub use error::RecipeError;
 pub use events::{Event, Observer, Phase, RunControl, Silent, UnitPosition};
 pub use output::Output;
 pub use plans::calibrate::{self, Calibration, CalibrationConfig, calibrate};
-pub use plans::scan::{self, ScanConfig, ScanPoints, ScanSummary, scan};
-pub use progress::{EventLine, RunProgress, RunSummary};
+pub use plans::scan::{self, PREPARE_WHOLE_PLAN_POINTS, ScanConfig, ScanPoints, ScanSummary, scan};
+pub use progress::{EventLine, RunProgress, RunSummary, resume_command};
 pub use remaining::RemainingTime;

@@ -26,7 +26,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     run::init_log(&common.out, "calibrate")?;
     let Opened { plate, mut rig, lab: _lab, .. } =
         rig::open(&common.source, metaplate_drivers::OpenPurpose::Measure, |plate| {
-            let points = Some(plate.driving_points());
+            let points = Some(plate.scene.driving_points());
             let galvo_fit = common.galvo_fit()?;
             Ok(LabOptions {
                 seed: common.seed,
@@ -40,7 +40,7 @@ pub fn run(args: &CalibrateArgs) -> anyhow::Result<()> {
     let control = RunControl::new();
     let mut reporter = Reporter::new("calibrate", "actuators", common);
     run::handle_ctrl_c(&control, reporter.bar())?;
-    let sites = plate.actuator_sites_m();
+    let sites = plate.scene.actuator_sites_m();
     let result = calibrate(&mut rig, &sites, &config, &common.output(plate.id.clone())?, &control, &mut reporter);
     let results = run::conclude(result, common)?;
     if !common.json {

@@ -74,9 +74,9 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     let opened = rig::open(&args.source, metaplate_drivers::OpenPurpose::Check, |plate| {
         let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
         // A small plan is prepared whole (shared with a scan of it); a large one: the LDV points only.
-        let points = plate
-            .small_plan_points(&plan)
-            .unwrap_or_else(|| [plan.spread(LDV_POINTS), plate.driving_points()].concat());
+        let points = plan
+            .prepared_whole(&plate.scene)
+            .unwrap_or_else(|| [plan.spread(LDV_POINTS), plate.scene.driving_points()].concat());
         let ldv_link = if args.ldv_pty { LdvLink::Pty } else { LdvLink::InProcess };
         Ok(LabOptions {
             seed: args.seed,
@@ -98,7 +98,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         (free, budget) => free.or(budget),
     };
     let mut config = PreflightConfig::new(
-        plate.actuator_sites_m(),
+        plate.scene.actuator_sites_m(),
         plan.spread(LDV_POINTS).into_iter().map(|p| plate.scene.grid.position_m(p)).collect(),
     );
     config.planned =
@@ -142,7 +142,8 @@ fn unopened(args: &CheckArgs, error: anyhow::Error) -> anyhow::Result<()> {
 fn finish(args: &CheckArgs, plate: &SceneId, report: &PreflightReport, rig: Option<&mut Rig>) -> anyhow::Result<()> {
     let document = report.document(plate, env!("CARGO_PKG_VERSION"), rig);
     if let Some(path) = &args.report {
-        write_report(path, &document)?;
+        metaplate_recipes::preflight::write_report(path, &document)
+            .with_context(|| format!("cannot write the report {}", path.display()))?;
     }
     if args.json {
         println!("{document}")
@@ -153,13 +154,4 @@ fn finish(args: &CheckArgs, plate: &SceneId, report: &PreflightReport, rig: Opti
         std::process::exit(EXIT_FLAGGED);
     }
     Ok(())
-}
-
-/// Writes the report durably (the store's write: a temporary file, fsync'd, renamed): a report that exists is whole.
-fn write_report(path: &std::path::Path, document: &serde_json::Value) -> anyhow::Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str());
-    let name = name.with_context(|| format!("--report {} must end in a file name of UTF-8 text", path.display()))?;
-    metaplate_store::write_bytes(dir, name, format!("{document:#}\n").as_bytes())
-        .with_context(|| format!("cannot write the report {}", path.display()))
 }

@@ -13,6 +13,8 @@ use metaplate_recipes::drive::DRIVE_PEAK_FS;
 use metaplate_recipes::play::check_playable;
 use metaplate_store::Dataset;
 
+use metaplate_lab::LabOptions;
+
 use crate::rig::{self, Plate};
 use crate::run::Source;
 
@@ -73,7 +75,9 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
             let plate = Plate::resolve(scene)?;
             check_playable(&dataset, &plate.id)?;
             // Only the magnets are prepared: nothing is measured at the pixels (the beam rests where it is).
-            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), None, args.cache.dir())?;
+            let points = Some(plate.scene.driving_points());
+            let options = LabOptions { seed: None, cache_dir: args.cache.dir(), points, ..LabOptions::default() };
+            let (lab, rig) = rig::mock_rig_with(&plate, &options)?;
             (rig, Some(lab), None)
         }
         (None, None) => bail!("give --scene or --hardware"),

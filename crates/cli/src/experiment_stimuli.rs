@@ -14,7 +14,8 @@ use metaplate_lab::{LabOptions, MockLab};
 use metaplate_recipes::drive::DRIVE_PEAK_FS;
 use metaplate_store::Dataset;
 
-use crate::rig::{PREPARE_WHOLE_PLAN_POINTS, Plate};
+use crate::rig::Plate;
+use metaplate_recipes::PREPARE_WHOLE_PLAN_POINTS;
 
 /// Arguments of `metaplate experiment stimuli`.
 #[derive(Args, Debug)]
@@ -67,7 +68,7 @@ pub fn run(args: &StimuliArgs) -> anyhow::Result<()> {
         Some(scene) => {
             let plate = Plate::resolve(scene)?;
             let reach = truth_reach(&dataset, &resolved, args.fingertip_radius_m, &plate.id, scene)?;
-            let points = truth_points(&dataset, &reach, PREPARE_WHOLE_PLAN_POINTS, plate.driving_points());
+            let points = truth_points(&dataset, &reach, PREPARE_WHOLE_PLAN_POINTS, plate.scene.driving_points());
             eprintln!("the ground truth: the plate of `{scene}` at {} points (cached once computed)", points.len());
             let (seed, cache_dir) = (Some(dataset.manifest().meta.seed), args.cache.dir());
             let options = LabOptions { seed, points: Some(points), cache_dir, ..LabOptions::default() };

@@ -10,6 +10,8 @@ use metaplate_recipes::drive::DRIVE_PEAK_FS;
 use metaplate_recipes::play::{check_playable, prepare};
 use metaplate_store::Dataset;
 
+use metaplate_lab::LabOptions;
+
 use crate::rig::{self, Plate};
 use crate::run::Source;
 
@@ -61,7 +63,9 @@ pub fn run(args: &PlayArgs) -> anyhow::Result<()> {
             let plate = Plate::resolve(scene)?;
             check_playable(&dataset, &plate.id)?;
             // Only the magnets are prepared: nothing is measured at the pixels (the beam rests where it is).
-            let (lab, rig) = rig::mock_rig(&plate, plate.driving_points(), args.seed, args.cache.dir())?;
+            let points = Some(plate.scene.driving_points());
+            let options = LabOptions { seed: args.seed, cache_dir: args.cache.dir(), points, ..LabOptions::default() };
+            let (lab, rig) = rig::mock_rig_with(&plate, &options)?;
             (plate, rig, Some(lab))
         }
         (None, None) => bail!("give --scene or --hardware"),

@@ -3,13 +3,12 @@
 //! file's format and checks its wiring against its plate; `crates/cli/hardware.example.toml` is an example). Which
 //! backends this binary has is its cargo features (default `hardware`: all of them).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use metaplate_core::rig::Rig;
 use metaplate_core::scene::Scene;
 use metaplate_drivers::{OpenPurpose, OpenedRig};
 use metaplate_lab::{LabOptions, MockLab};
-use metaplate_recipes::ScanPoints;
 use metaplate_store::SceneId;
 
 use crate::run::Source;
@@ -38,41 +37,6 @@ impl Plate {
         let id = scene.id();
         Self { scene, id }
     }
-
-    /// Each actuator's magnet position, m, in actuator order.
-    pub fn actuator_sites_m(&self) -> Vec<(f64, f64)> {
-        self.scene.actuators.iter().map(|a| (a.x_m, a.y_m)).collect()
-    }
-
-    /// Flat "point" indices of the actuators' driving points in the mock lab (`grid.len() + k`).
-    pub fn driving_points(&self) -> Vec<usize> {
-        let n = self.scene.grid.len();
-        (0..self.scene.actuators.len()).map(|k| n + k).collect()
-    }
-
-    /// The points a mock lab prepares for `plan` when it is small (at most [`PREPARE_WHOLE_PLAN_POINTS`]): its
-    /// points and the driving points, so a `check` and a scan of the same plan share one Green's-function cache
-    /// entry. `None` for a larger plan, whose caller prepares only what it visits.
-    pub fn small_plan_points(&self, plan: &ScanPoints) -> Option<Vec<usize>> {
-        (plan.points.len() <= PREPARE_WHOLE_PLAN_POINTS).then(|| [plan.points.clone(), self.driving_points()].concat())
-    }
-}
-
-/// On the mock lab, a plan of at most this many points is prepared whole ([`Plate::small_plan_points`]; 64 points
-/// of 8 responses of 0.5 s take 100 MB).
-pub const PREPARE_WHOLE_PLAN_POINTS: usize = 64;
-
-/// The mock lab of `plate`'s scene preparing only `points`, with its rig. Keep the lab alive while the rig is used.
-///
-/// # Errors
-/// The lab's reason.
-pub fn mock_rig(
-    plate: &Plate,
-    points: Vec<usize>,
-    seed: Option<u64>,
-    cache_dir: Option<PathBuf>,
-) -> anyhow::Result<(MockLab, Rig)> {
-    mock_rig_with(plate, &LabOptions { seed, cache_dir, points: Some(points), ..LabOptions::default() })
 }
 
 /// The mock lab of `plate`'s scene with `options`, with its rig. Keep the lab alive while the rig is used.

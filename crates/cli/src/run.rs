@@ -259,28 +259,6 @@ impl Reporter {
     }
 }
 
-/// Logs `event` of `recipe`'s run (target `metaplate::run`, which the monitor reads): the start, commits, retries,
-/// recoveries, the end; not phases (a moment, not news).
-fn log(recipe: &str, event: &Event) {
-    match event {
-        Event::Started { total, done, dataset, config_hash, .. } => {
-            tracing::info!(total, done, dataset = %dataset.display(), config_hash, "{recipe} started")
-        }
-        Event::Committed { unit, done, total, snr_db, status, clock_s, .. } => {
-            tracing::info!(unit, done, total, ?snr_db, status = %status, clock_s, "committed")
-        }
-        Event::Phase { .. } => {}
-        Event::Retry { unit, attempt, reason } => tracing::info!(unit, attempt, %reason, "retry"),
-        Event::Recovered { detail } => tracing::warn!(%detail, "recovered"),
-        Event::Paused { detail } => tracing::warn!(%detail, "paused, polling"),
-        Event::ReferenceChecked { point, actuator, deviation_db, limit_db } => {
-            tracing::info!(point, actuator, deviation_db, limit_db, "reference point re-measured")
-        }
-        Event::Stopped { done } => tracing::info!(done, "stopped on request"),
-        Event::Finished { done } => tracing::info!(done, "finished"),
-    }
-}
-
 /// One JSON line on stdout. A closed stdout must not stop a measurement: the dataset and the log still record
 /// everything.
 fn print_line(line: &EventLine) {
@@ -292,7 +270,7 @@ fn print_line(line: &EventLine) {
 
 impl Observer for Reporter {
     fn event(&mut self, event: &Event) {
-        log(self.progress.recipe(), event);
+        event.log(self.progress.recipe());
         self.progress.track(event);
         if let Event::Started { dataset, resumed: false, .. } = event
             && self.resume
@@ -324,21 +302,6 @@ pub fn report_failure(recipe: &'static str, args: &RunArgs, message: &str) {
     }
 }
 
-/// The command line that continues this run: the original arguments with `--resume` added (once).
-pub fn resume_command() -> String {
-    let mut args: Vec<String> = std::env::args().collect();
-    if !args.iter().any(|a| a == "--resume") {
-        args.push("--resume".into());
-    }
-    args.iter().map(|a| shell_quote(a)).collect::<Vec<_>>().join(" ")
-}
-
-/// `text` quoted for a POSIX shell when it needs it.
-fn shell_quote(text: &str) -> String {
-    let plain = !text.is_empty() && text.bytes().all(|b| b.is_ascii_alphanumeric() || b"-_./=:,+@%".contains(&b));
-    if plain { text.to_string() } else { format!("'{}'", text.replace('\'', r"'\''")) }
-}
-
 /// Ends a run: passes a result through; for a run stopped by Ctrl-C prints the resume command and exits with
 /// [`EXIT_INTERRUPTED`]; turns other errors into messages that say what to do (a non-empty directory, a changed
 /// configuration), with the resume command when a dataset was started.
@@ -353,7 +316,7 @@ pub fn conclude<T>(result: Result<T, RecipeError>, args: &RunArgs) -> anyhow::Re
     match &error {
         RecipeError::Interrupted { committed } => {
             eprintln!("stopped with {committed} committed; everything committed is kept. Resume with:");
-            eprintln!("  {}", resume_command());
+            eprintln!("  {}", metaplate_recipes::resume_command());
             std::process::exit(EXIT_INTERRUPTED);
         }
         RecipeError::Store(StoreError::NotEmpty { .. }) => Err(anyhow::Error::new(error).context(format!(
@@ -364,7 +327,7 @@ pub fn conclude<T>(result: Result<T, RecipeError>, args: &RunArgs) -> anyhow::Re
             .context("the run in --out was made with another configuration: add --force to resume it anyway")),
         _ if args.out.join(MANIFEST_FILE).exists() => {
             eprintln!("the run stopped; everything committed is kept. Once the problem is fixed, resume with:");
-            eprintln!("  {}", resume_command());
+            eprintln!("  {}", metaplate_recipes::resume_command());
             Err(error.into())
         }
         _ => Err(error.into()),

@@ -56,7 +56,7 @@ pub fn run(args: &ScanArgs) -> anyhow::Result<()> {
     let Opened { plate, mut rig, lab: _lab, .. } =
         rig::open(&common.source, metaplate_drivers::OpenPurpose::Measure, |plate| {
             let plan = ScanPoints::of_scene(&plate.scene, args.grid)?;
-            let points = plate.small_plan_points(&plan).unwrap_or(plan.points);
+            let points = plan.prepared_whole(&plate.scene).unwrap_or(plan.points);
             let galvo_fit = common.galvo_fit()?;
             let cache_dir = common.cache.dir();
             Ok(LabOptions { seed: common.seed, cache_dir, points: Some(points), galvo_fit, ..Default::default() })

@@ -240,6 +240,20 @@ impl PreflightReport {
     }
 }
 
+/// Writes a pre-flight report's `document` to `path` durably (the store's write: a temporary file, fsync'd,
+/// renamed), so that a report that exists is whole.
+///
+/// # Errors
+/// [`RecipeError::Config`] for a path that does not end in a file name of UTF-8 text; [`RecipeError::Store`] when
+/// it cannot be written.
+pub fn write_report(path: &std::path::Path, document: &Value) -> Result<(), RecipeError> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    let name = path.file_name().and_then(|n| n.to_str()).ok_or_else(|| {
+        RecipeError::Config(format!("--report {} must end in a file name of UTF-8 text", path.display()))
+    })?;
+    Ok(metaplate_store::write_bytes(dir, name, format!("{document:#}\n").as_bytes())?)
+}
+
 /// Runs every check on `rig`, calling `on_check` with each outcome as it is known (for progress), and returns them
 /// all. Device failures are outcomes, not errors: the point is to report them. The devices are left stopped.
 ///

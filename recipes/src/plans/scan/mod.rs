@@ -92,6 +92,10 @@ impl Default for ScanConfig {
     }
 }
 
+/// On the mock lab, a plan of at most this many points is prepared whole ([`ScanPoints::prepared_whole`]; 64 points
+/// of 8 responses of 0.5 s take 100 MB).
+pub const PREPARE_WHOLE_PLAN_POINTS: usize = 64;
+
 /// Where a scan goes: the grid and the points to visit, in path order (what [`scan`] measures; the plan that
 /// measures them, like the calibration's, is internal).
 #[derive(Debug, Clone, PartialEq)]
@@ -129,6 +133,19 @@ impl ScanPoints {
     /// As [`ScanPoints::new`].
     pub fn of_scene(scene: &Scene, subset: Option<GridSubset>) -> Result<Self, RecipeError> {
         Self::new(scene.grid, &scene.grid_mask(), subset.map(Into::into))
+    }
+
+    /// The points a mock lab prepares for this plan on `scene` when it is small (at most
+    /// [`PREPARE_WHOLE_PLAN_POINTS`]): its points and the driving points, so a `check` and a scan of the same plan
+    /// share one Green's-function cache entry. `None` for a larger plan, whose caller prepares only what it visits.
+    pub fn prepared_whole(&self, scene: &Scene) -> Option<Vec<usize>> {
+        (self.points.len() <= PREPARE_WHOLE_PLAN_POINTS).then(|| self.with_driving_points(scene))
+    }
+
+    /// The plan's points and, after them, `scene`'s driving points ([`Scene::driving_points`]): what a mock lab
+    /// prepares to measure this plan and calibrate.
+    pub fn with_driving_points(&self, scene: &Scene) -> Vec<usize> {
+        [self.points.clone(), scene.driving_points()].concat()
     }
 
     /// `n` points spread along the path (at 1/(n+1), 2/(n+1), ... of it), without repeats.

@@ -262,6 +262,18 @@ impl Scene {
     pub fn measured_points(&self) -> Vec<usize> {
         self.grid_mask().iter().enumerate().filter_map(|(i, &m)| m.then_some(i)).collect()
     }
+
+    /// The actuators' driving points as flat "point" indices after the grid's (`grid.len() + k` for actuator `k`,
+    /// on its magnet, where a calibration aims the beam).
+    pub fn driving_points(&self) -> Vec<usize> {
+        let n = self.grid.len();
+        (0..self.actuators.len()).map(|k| n + k).collect()
+    }
+
+    /// Each actuator's magnet position, m, in actuator order.
+    pub fn actuator_sites_m(&self) -> Vec<(f64, f64)> {
+        self.actuators.iter().map(|a| (a.x_m, a.y_m)).collect()
+    }
 }
 
 impl TryFrom<SceneFile> for Scene {
