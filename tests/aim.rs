@@ -3,8 +3,6 @@
 //! a 7 x 5 scan aimed through it landing within 0.3 mm of every target, and `scan --galvo-fit` aiming the mock lab
 //! through it.
 
-use std::io::Write as _;
-use std::process::{Command, Stdio};
 use std::sync::Arc;
 
 use metaplate_aim::galvo::{GalvoAimer, GalvoSettings, file};
@@ -25,16 +23,8 @@ fn aim_teach_on_the_mock_galvo_with_scripted_keys_lands_a_7_by_5_scan_within_0_3
     let (teach, keys) = teach_nine_marks(geometry).unwrap();
 
     let fit_path = dir.join("galvo-fit.toml");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_metaplate"))
-        .args(["aim", "teach", "--scene", "metamaterial", "--marks-file", marks_file.to_str().unwrap()])
-        .args(["--out", fit_path.to_str().unwrap()])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child.stdin.take().unwrap().write_all(&keys).unwrap();
-    let out = child.wait_with_output().unwrap();
+    let args = ["aim", "teach", "--scene", "metamaterial", "--marks-file", marks_file.to_str().unwrap()];
+    let out = crate::common::metaplate_with_input(&[&args[..], &["--out", fit_path.to_str().unwrap()]].concat(), &keys);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains(&format!("wrote {}", fit_path.display())), "{stdout}");

@@ -22,5 +22,6 @@ mod play;
 mod recipes;
 mod replay;
 mod report;
+mod standin;
 mod tradeoff;
 mod uff;

@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 
+use crate::common::interrupt;
 use metaplate_store::{Dataset, Status};
 use serde_json::Value;
 
@@ -64,12 +65,6 @@ fn assert_complete_scan(dir: &Path) {
     for row in dataset.rows() {
         assert!(matches!(row.status, Some(Status::Valid | Status::ReMeasured)), "{row:?}");
     }
-}
-
-/// Sends SIGINT (what Ctrl-C sends) to `child`, with kill(1): the workspace forbids unsafe code, tests included.
-fn interrupt(child: &std::process::Child) {
-    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
-    assert!(status.success());
 }
 
 #[test]

@@ -118,3 +118,25 @@ pub fn fingertip_scan() -> PathBuf {
     let (cal, _) = calibrated_scan();
     cal.with_file_name("scan-7x5")
 }
+
+/// Sends SIGINT (what Ctrl-C sends) to `child`, with kill(1): the workspace forbids unsafe code, tests included.
+pub fn interrupt(child: &std::process::Child) {
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+}
+
+/// `metaplate ARGS` (as given) with `stdin` written to its standard input (a user's keys), its output collected.
+pub fn metaplate_with_input(args: &[&str], stdin: &[u8]) -> Output {
+    use std::io::Write as _;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(args)
+        .env("RUST_BACKTRACE", "0")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(stdin).unwrap();
+    child.wait_with_output().unwrap()
+}

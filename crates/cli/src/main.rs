@@ -20,6 +20,7 @@ mod experiment_stimuli;
 mod export;
 mod focus;
 mod import;
+mod lab;
 mod monitor;
 mod play;
 mod progress;
@@ -114,6 +115,11 @@ enum Command {
         #[command(subcommand)]
         command: design::DesignCommand,
     },
+    /// The stand-in rig (`lab serve`): a scene's mock lab behind the real instruments' links, for rehearsing.
+    Lab {
+        #[command(subcommand)]
+        command: lab::LabCommand,
+    },
     /// The simulated plate's ground truth: dispersion, Green's functions.
     Simulate {
         #[command(subcommand)]
@@ -162,6 +168,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Tradeoff(args) => tradeoff::run(&args),
         Command::Budget(args) => budget::run(&args),
         Command::Simulate { command } => simulate::run(&command),
+        Command::Lab { command } => lab::run(&command),
         Command::Design { command } => design::run(&command),
         Command::Calibrate(args) => calibrate::run(&args),
         Command::Scan(args) => scan::run(&args),

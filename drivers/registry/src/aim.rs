@@ -13,6 +13,7 @@
 //! x_channel = "ao0"
 //! y_channel = "ao1"
 //! limit_v = 10.0           # optional: the outputs' range, +/- V (default 10)
+//! library = "/opt/.../libnidaqmx.so" # optional: as [daq]'s (default: $METAPLATE_NIDAQMX_LIBRARY, else NI's)
 //! ```
 //! Without `[aim]` the rig has no aimer and every point is refused, naming this section.
 
@@ -73,6 +74,9 @@ pub struct NidaqmxOutputs {
     /// The outputs' range, +/- V (default 10: Thorlabs GVS drivers take +/- 10 V).
     #[serde(default = "default_limit_v")]
     pub limit_v: f64,
+    /// The library to load instead of NI's, as `[daq]`'s `library` (relative: to the hardware file's folder, which
+    /// parsing resolves); `None`: `$METAPLATE_NIDAQMX_LIBRARY`, else NI's.
+    pub library: Option<PathBuf>,
 }
 
 fn default_limit_v() -> f64 {
@@ -115,9 +119,11 @@ pub(crate) fn parse_galvo(path: &Path, table: toml::Table) -> Result<AimSection,
     };
     let outputs = match backend.as_str() {
         "nidaqmx" => {
-            let ni: NidaqmxOutputs = toml::Value::Table(outputs)
+            let mut ni: NidaqmxOutputs = toml::Value::Table(outputs)
                 .try_into()
                 .map_err(|e: toml::de::Error| ("aim.outputs".to_owned(), e.message().trim_end().to_owned()))?;
+            ni.library =
+                ni.library.map(|l| if l.is_absolute() { l } else { path.parent().unwrap_or(Path::new("")).join(l) });
             if ni.device.is_empty() || ni.device.contains('\0') {
                 return Err((
                     "aim.outputs.device".into(),

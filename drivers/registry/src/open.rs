@@ -346,9 +346,14 @@ fn open_mirror_outputs(
             #[cfg(feature = "nidaqmx")]
             {
                 let _ = file;
-                let outputs =
-                    metaplate_daq::NiMirrorOutputs::open(&ni.device, &ni.x_channel, &ni.y_channel, ni.limit_v, None)
-                        .map_err(|e| device(Capability::Aim, "galvo", &ni.device, e))?;
+                let outputs = metaplate_daq::NiMirrorOutputs::open(
+                    &ni.device,
+                    &ni.x_channel,
+                    &ni.y_channel,
+                    ni.limit_v,
+                    ni.library.clone(),
+                )
+                .map_err(|e| device(Capability::Aim, "galvo", &ni.device, e))?;
                 Ok(Box::new(outputs))
             }
             #[cfg(not(feature = "nidaqmx"))]

@@ -126,6 +126,8 @@ mod chain;
 mod direct_daq;
 mod links;
 pub mod mirrors;
+#[cfg(unix)]
+pub mod serve;
 pub mod session;
 pub mod teacher;
 mod truth;
@@ -202,6 +204,12 @@ pub enum LabError {
     /// A lock was poisoned by a panic elsewhere.
     #[error("{0} lock was poisoned")]
     Poisoned(&'static str),
+    /// The stand-in rig cannot serve: its folder, FIFO, socket, library copy or hardware file.
+    #[error("the stand-in rig: {what}")]
+    Serve {
+        /// What failed, and the system's reason.
+        what: String,
+    },
 }
 
 /// How the LDV controller is served.
@@ -337,12 +345,8 @@ impl MockLab {
         }
         // By default the measured points and the actuators' driving points (index `grid.len() + k`, where the
         // calibration recipe aims the beam, on the magnet).
-        let points = options.points.clone().unwrap_or_else(|| {
-            let grid_len = scene.grid.len();
-            let mut points = scene.measured_points();
-            points.extend((0..scene.actuators.len()).map(|k| grid_len + k));
-            points
-        });
+        let points =
+            options.points.clone().unwrap_or_else(|| [scene.measured_points(), scene.driving_points()].concat());
         // An aiming error (the scene's drawn one, or a taught galvo fit's) needs the response's slope at each grid
         // point: its measurable grid neighbours too.
         let aim_errs = scene.ldv.aim_error_rms_m > 0.0 || options.galvo_fit.is_some();

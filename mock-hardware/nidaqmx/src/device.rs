@@ -61,6 +61,8 @@ pub mod codes {
     pub const READ_NO_INPUT_CHANS: i32 = -200460;
     /// `DAQmxErrorOutputBufferEmpty`: a timed output started before any sample was written.
     pub const OUTPUT_BUFFER_EMPTY: i32 = -200462;
+    /// `DAQmxErrorDeviceCannotBeAccessed` (-201003): the device went away (here: the stand-in rig it reads).
+    pub const DEVICE_CANNOT_BE_ACCESSED: i32 = -201003;
 }
 
 /// What a simulated device is.

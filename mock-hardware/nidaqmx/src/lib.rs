@@ -16,6 +16,9 @@
 //! - the wiring of every device: `ao0` looped back to `ai0`, `ao1` to `ai1`, so what is written reads back;
 //!   `ai2` .. `ai15` a deterministic sine ([`model`]).
 //!
+//! Beside a running stand-in rig (`metaplate lab serve` copies the library into its folder, next to its socket), the
+//! timed analog inputs read the mock lab's signals instead ([`lab`]).
+//!
 //! Point the backend at it with `METAPLATE_NIDAQMX_LIBRARY=/path/to/target/debug/libnidaqmx_standin.so` (or a hardware
 //! file's `[daq] library`). Its state is per process, like NI-DAQmx's.
 //!
@@ -23,6 +26,7 @@
 
 pub mod device;
 pub mod exports;
+pub mod lab;
 pub mod model;
 
 use std::sync::{Mutex, MutexGuard};

@@ -22,6 +22,10 @@ pub enum FaultKind {
     AudioUnderrun,
     /// The vibrometer loses its signal (speckle or a dropped beam).
     LdvDropout,
+    /// A motorised stage stalls and stops (Zaber's `FS` warning): the stand-in rig's (`metaplate lab serve`) Y
+    /// stage on its first move, homing included. Its stages run on the wall clock, so the window's times are not
+    /// used.
+    StageStall,
 }
 
 /// One scheduled fault.

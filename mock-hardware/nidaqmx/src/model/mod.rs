@@ -5,12 +5,16 @@
 //! (up to its timeout) for the samples it asks for, and finds the buffer overwritten (-200279) when more than the
 //! buffer holds were acquired and not read. Wiring of every device: `ao0` is looped back to `ai0` and `ao1` to
 //! `ai1` (what a lab cables to check its outputs); `ai2` .. `ai15` carry a deterministic sine (0.5 V at
-//! 1 kHz x (input - 1)), clipped to the channel's range.
+//! 1 kHz x (input - 1)), clipped to the channel's range. Beside a stand-in rig, its timed inputs and on-demand
+//! outputs go to the rig instead ([`rig`]).
+
+mod rig;
 
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 use crate::device::{self, Device, codes};
+use crate::lab::LabLink;
 
 /// An NI status with its extended error text.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,6 +23,21 @@ pub struct NiError {
     pub code: i32,
     /// What `DAQmxGetExtendedErrorInfo` returns after it.
     pub message: String,
+}
+
+/// -200279: unread samples were overwritten (the input buffer overflowed).
+fn overwritten(task_name: &str) -> NiError {
+    err(
+        codes::SAMPLES_NO_LONGER_AVAILABLE,
+        "Attempted to read samples that are no longer available. The requested sample was \
+        previously available, but has since been overwritten.\n\nIncreasing the buffer size, \
+        reading the data more frequently, or specifying a fixed number of samples to read instead \
+        of reading all available samples might correct the problem.",
+        &format!(
+            "Property: DAQmx_Read_RelativeTo\nCorresponding Value: DAQmx_Val_CurrReadPos\nProperty: \
+            DAQmx_Read_Offset\nCorresponding Value: 0\n\nTask Name: {task_name}"
+        ),
+    )
 }
 
 fn err(code: i32, what: &str, detail: &str) -> NiError {
@@ -73,6 +92,15 @@ struct Task {
     read_pos: u64,
 }
 
+/// Where a read's samples come from.
+#[derive(Clone, Copy)]
+enum Samples<'a> {
+    /// The built-in wiring, for a task started at `t0` sampling at `rate_hz`.
+    Wiring { t0: Instant, rate_hz: f64 },
+    /// The stand-in rig's reply, by scan.
+    Rig(&'a [f64]),
+}
+
 /// What a read found.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ReadOutcome {
@@ -89,6 +117,13 @@ pub struct StandIn {
     next_handle: u64,
     /// The voltage each analog output holds when no timed task drives it, by (device, output).
     held_v: BTreeMap<(String, u8), f64>,
+    /// The stand-in rig's socket, when set ([`StandIn::set_lab_socket`]); else the one beside the library, if any
+    /// ([`crate::lab::socket_beside_library`]).
+    lab_socket: Option<std::path::PathBuf>,
+    /// The lab links of the running timed input tasks that read the stand-in rig, by task handle.
+    labs: BTreeMap<u64, LabLink>,
+    /// The lab link the on-demand output writes are told over, once one was made.
+    outputs_link: Option<LabLink>,
 }
 
 fn device_or_error(name: &str) -> Result<Device, NiError> {
@@ -140,7 +175,20 @@ fn physical_channels(text: &str, kind: &str, count: u8) -> Result<Vec<(Device, u
 impl StandIn {
     /// An empty NI-DAQmx: no tasks, every output at 0 V.
     pub const fn new() -> Self {
-        Self { tasks: BTreeMap::new(), next_handle: 0, held_v: BTreeMap::new() }
+        Self {
+            tasks: BTreeMap::new(),
+            next_handle: 0,
+            held_v: BTreeMap::new(),
+            lab_socket: None,
+            labs: BTreeMap::new(),
+            outputs_link: None,
+        }
+    }
+
+    /// Reads timed analog inputs from the stand-in rig listening at `socket` ([`crate::lab`]) rather than from the
+    /// built-in wiring (`None`: the socket beside the library, if there is one).
+    pub fn set_lab_socket(&mut self, socket: Option<std::path::PathBuf>) {
+        self.lab_socket = socket;
     }
 
     fn task(&mut self, handle: u64) -> Result<&mut Task, NiError> {
@@ -396,19 +444,33 @@ impl StandIn {
         t.state = state;
         t.read_pos = 0;
         if let State::Running { t0 } = state {
-            self.fire_triggers(&task, t0);
+            if let Err(e) = self.open_lab(handle) {
+                // Not started: a later start tries again, rather than reading the built-in wiring.
+                self.task(handle)?.state = State::Idle;
+                return Err(e);
+            }
+            self.fire_triggers(&task, t0)?;
         }
         Ok(())
     }
 
-    fn fire_triggers(&mut self, started: &Task, t0: Instant) {
+    fn fire_triggers(&mut self, started: &Task, t0: Instant) -> Result<(), NiError> {
         let mut sources: Vec<String> = started.ao.iter().map(|c| format!("/{}/ao/starttrigger", c.device)).collect();
         sources.extend(started.ai.iter().map(|c| format!("/{}/ai/starttrigger", c.device)));
-        for other in self.tasks.values_mut() {
+        let mut fired = Vec::new();
+        for (handle, other) in &mut self.tasks {
             if other.state == State::Armed && other.trigger.as_ref().is_some_and(|t| sources.contains(t)) {
                 other.state = State::Running { t0 };
+                fired.push(*handle);
             }
         }
+        for handle in fired {
+            if let Err(e) = self.open_lab(handle) {
+                self.task(handle)?.state = State::Armed;
+                return Err(e);
+            }
+        }
+        Ok(())
     }
 
     /// `DAQmxStopTask`: the task is idle again and its resources free; a timed output keeps the voltage it was at.
@@ -426,6 +488,8 @@ impl StandIn {
             }
         }
         self.task(handle)?.state = State::Idle;
+        // Hanging up ends the rig's acquisition.
+        self.labs.remove(&handle);
         Ok(())
     }
 
@@ -497,12 +561,15 @@ impl StandIn {
         }
         let Some(timing) = task.timing else {
             // On-demand: one sample, now.
-            return self.fill(&task, handle, now, 1.0, 1, fill_mode, out);
+            return self.fill(&task, handle, Samples::Wiring { t0: now, rate_hz: 1.0 }, 1, fill_mode, out);
         };
         let State::Running { t0 } = task.state else { return Ok(ReadOutcome::Wait(None)) };
         let mut acquired = ((now - t0).as_secs_f64() * timing.rate_hz) as u64;
         if !timing.continuous {
             acquired = acquired.min(timing.samps_per_chan);
+        }
+        if self.labs.contains_key(&handle) {
+            return self.read_from_lab(&task, handle, acquired, num, fill_mode, out, now);
         }
         let buffer = if timing.continuous {
             timing.samps_per_chan.max(device::default_buffer_samples(timing.rate_hz))
@@ -511,34 +578,21 @@ impl StandIn {
         };
         let unread = acquired.saturating_sub(task.read_pos);
         if unread > buffer {
-            return Err(err(
-                codes::SAMPLES_NO_LONGER_AVAILABLE,
-                "Attempted to read samples that are no longer available. The requested sample was \
-                previously available, but has since been overwritten.\n\nIncreasing the buffer size, \
-                reading the data more frequently, or specifying a fixed number of samples to read instead \
-                of reading all available samples might correct the problem.",
-                &format!(
-                    "Property: DAQmx_Read_RelativeTo\nCorresponding Value: DAQmx_Val_CurrReadPos\nProperty: \
-                    DAQmx_Read_Offset\nCorresponding Value: 0\n\nTask Name: {}",
-                    task.name
-                ),
-            ));
+            return Err(overwritten(&task.name));
         }
         let want = if num < 0 { unread } else { u64::from(num.unsigned_abs()) };
         if unread < want {
             let ready = t0 + std::time::Duration::from_secs_f64((task.read_pos + want) as f64 / timing.rate_hz);
             return Ok(ReadOutcome::Wait(Some(ready)));
         }
-        self.fill(&task, handle, t0, timing.rate_hz, want, fill_mode, out)
+        self.fill(&task, handle, Samples::Wiring { t0, rate_hz: timing.rate_hz }, want, fill_mode, out)
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn fill(
         &mut self,
         task: &Task,
         handle: u64,
-        t0: Instant,
-        rate_hz: f64,
+        samples: Samples<'_>,
         want: u64,
         fill_mode: u32,
         out: &mut [f64],
@@ -559,7 +613,10 @@ impl StandIn {
         }
         for s in 0..want_usize {
             for (c, chan) in task.ai.iter().enumerate() {
-                let v = self.ai_value(chan, t0, rate_hz, task.read_pos + s as u64);
+                let v = match samples {
+                    Samples::Wiring { t0, rate_hz } => self.ai_value(chan, t0, rate_hz, task.read_pos + s as u64),
+                    Samples::Rig(values) => values[s * n_ch + c].clamp(-chan.range_v, chan.range_v),
+                };
                 let at = if fill_mode == device::VAL_GROUP_BY_SCAN_NUMBER { s * n_ch + c } else { c * want_usize + s };
                 out[at] = v;
             }
@@ -647,6 +704,9 @@ impl StandIn {
             if let Some(last) = samples.last() {
                 self.held_v.insert((chan.device.clone(), chan.index), *last);
             }
+        }
+        if let Some(device) = task.ao.first().map(|c| c.device.clone()) {
+            self.forward_outputs(&device)?;
         }
         Ok(num)
     }
