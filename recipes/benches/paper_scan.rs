@@ -7,7 +7,7 @@
 //! simulated (rig clock) hours and their ratio, the time spent in commits (absolute, % of wall, % of simulated scan
 //! time), and the resume start-up time (the finished dataset re-opened with resume: wall time until the scan's
 //! `Started` event, which comes after verifying every committed file). The plate's Green's functions are cached in
-//! the system's temporary directory (`metaplate-greens`): the first run computes them (minutes for the full grid).
+//! the target's temporary directory (`target/tmp/metaplate-greens`): the first run computes them (minutes for the full grid).
 
 use std::error::Error;
 use std::time::Instant;
@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         plan.points.truncate(n.max(1));
     }
     let cfg = ScanConfig { protocol: ExcitationProtocol::by_name(&args.protocol)?, seed: 1, ..ScanConfig::default() };
-    let cache = std::env::temp_dir().join("metaplate-greens");
+    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("metaplate-greens");
     let options = LabOptions { points: Some(plan.points.clone()), cache_dir: Some(cache), ..LabOptions::default() };
     let lab_started = Instant::now();
     let lab = MockLab::new(&scene, &options)?;

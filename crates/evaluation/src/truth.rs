@@ -155,7 +155,11 @@ mod tests {
         let scene = metaplate_core::scene::Scene::builtin("homogeneous").unwrap();
         let measured = scene.measured_points();
         let point = measured[measured.len() / 2];
-        let cache = std::env::temp_dir().join("metaplate-evaluation-tests-cache");
+        // Kept between runs, under the target directory (`target/tmp`, where integration tests keep theirs: a unit
+        // test has no CARGO_TARGET_TMPDIR); the test binary is target/PROFILE/deps/NAME.
+        let exe = std::env::current_exe().unwrap();
+        let target = exe.ancestors().nth(3).unwrap();
+        let cache = target.join("tmp").join("metaplate-evaluation-tests-cache");
         std::fs::create_dir_all(&cache).unwrap();
         let options = LabOptions {
             seed: Some(1),

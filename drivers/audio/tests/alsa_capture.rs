@@ -31,7 +31,8 @@ fn signal() -> Vec<f32> {
 
 #[test]
 fn the_interfaces_inputs_are_read_as_volts_through_libasound() {
-    let dir = std::env::temp_dir().join(format!("metaplate-alsa-capture-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("metaplate-alsa-capture-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let infile = dir.join("in.raw");
     // FLOAT_LE, the backend's first choice, which the null PCM accepts.

@@ -304,7 +304,8 @@ fn a_lattice_named_by_a_design_takes_its_rods_and_is_written_inline() {
     assert_eq!(Scene::from_toml_str(&text, "written").unwrap(), s);
     assert_eq!(toml::from_str::<Scene>(&text).unwrap(), s);
     assert_eq!(s.id(), Scene::builtin("metamaterial").unwrap().id(), "the built-in is this scene");
-    let dir = std::env::temp_dir().join(format!("metaplate-scene-design-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("metaplate-scene-design-{}", std::process::id()));
     std::fs::create_dir_all(dir.join("cells")).unwrap();
     std::fs::write(dir.join("cells/mine.toml"), toml::to_string(&paper).unwrap()).unwrap();
     std::fs::write(dir.join("scene.toml"), designed("design = \"paper\"", "design = \"cells/mine.toml\"")).unwrap();

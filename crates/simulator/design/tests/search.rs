@@ -120,7 +120,8 @@ fn the_front_keeps_the_feasible_designs_none_beats_on_every_goal() {
 /// of another search and a missing shard are refused by name.
 #[test]
 fn shards_merged_equal_one_run_and_gaps_are_named() {
-    let root = std::env::temp_dir().join(format!("metaplate-search-lib-{}", std::process::id()));
+    let root =
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("metaplate-search-lib-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
     let text = format!(
         "base = \"paper\"\n[vary]\nrod_height_m = [0.02, 0.03]\nrod_diameter_m = [0.002, 0.003]\n\

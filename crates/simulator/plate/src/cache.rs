@@ -261,23 +261,20 @@ mod tests {
     use crate::entry::{EntryLayout, GreensEntry, Representation};
     use crate::greens::SpectralPlan;
 
-    /// A fresh scratch directory (no tempfile dependency in this crate).
+    /// A fresh scratch directory (under the system's temporary directory, named by tempfile; each test removes
+    /// it when it passes).
     fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("metaplate-plate-cache-{}-{name}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        dir
+        tempfile::Builder::new().prefix(&format!("metaplate-plate-cache-{name}-")).tempdir().unwrap().keep()
     }
 
     #[test]
     fn a_missing_cache_directory_is_created_with_its_parents() {
-        let root = scratch("create");
-        let dir = root.join("a").join("b");
+        let root = tempfile::tempdir().unwrap();
+        let dir = root.path().join("a").join("b");
         ensure_dir(&dir).unwrap();
         assert!(dir.is_dir());
         // Existing already: still fine.
         ensure_dir(&dir).unwrap();
-        fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]

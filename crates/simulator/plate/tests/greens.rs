@@ -55,9 +55,10 @@ fn the_frequency_grid_does_not_time_alias() {
     }
 }
 
-/// A fresh scratch cache directory of this process (no tempfile dependency in this crate).
+/// A fresh scratch cache directory of this process, under the target's temporary directory.
 fn scratch(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("metaplate-plate-cache-test-{}-{name}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("metaplate-plate-cache-test-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir

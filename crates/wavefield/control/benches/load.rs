@@ -121,7 +121,8 @@ fn main() {
             (dir, bytes)
         }
         None => {
-            let dir = std::env::temp_dir().join(format!("metaplate-load-bench-{}", std::process::id()));
+            let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+                .join(format!("metaplate-load-bench-{}", std::process::id()));
             let t = Stage::start();
             let bytes = write(&dir);
             eprintln!("wrote {:.1} MB of batches in {}", bytes as f64 / 1e6, t.end(bytes as f64 / 1e6));
