@@ -109,29 +109,32 @@ fn deconvolve_without_excitation_or_reference_is_refused() {
     assert!(String::from_utf8(out.stderr).unwrap().contains("--excitation"));
 }
 
+/// `metaplate simulate greens ARGS --out OUT` (a coarse lattice and a short, high band: seconds), with the cache
+/// environment variable set to `env_cache`.
+fn simulate_greens(out: &std::path::Path, env_cache: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_metaplate"))
+        .args(["simulate", "greens", "--scene", "homogeneous", "--grid", "3x2", "--refinement", "1"])
+        .args(["--duration-s", "0.1", "--band-lo-hz", "300", "--band-hi-hz", "700", "--out", out.to_str().unwrap()])
+        .args(extra)
+        .env("METAPLATE_CACHE_DIR", env_cache)
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap()
+}
+
+/// Whether `dir` holds anything (a cache entry).
+fn holds_entries(dir: &std::path::Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_some())
+}
+
 #[test]
-fn simulate_greens_writes_a_dataset_the_store_reads() {
-    let dir = common::scratch("commands-cli", "greens").join("gt");
-    // A coarse lattice and a short, high band keep this test to seconds; the physics is tested in the plate crate.
-    let out = metaplate(&[
-        "simulate",
-        "greens",
-        "--scene",
-        "homogeneous",
-        "--grid",
-        "3x2",
-        "--refinement",
-        "1",
-        "--duration-s",
-        "0.1",
-        "--band-lo-hz",
-        "300",
-        "--band-hi-hz",
-        "700",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
+fn simulate_greens_writes_a_dataset_the_store_reads_and_caches_where_told() {
+    let root = common::scratch("commands-cli", "greens");
+    let (dir, env_cache) = (root.join("gt"), root.join("env-cache"));
+    // Without --cache-dir, the cache is $METAPLATE_CACHE_DIR's.
+    let out = simulate_greens(&dir, &env_cache, &[]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(holds_entries(&env_cache), "the environment's cache directory holds the entry");
     let dataset = metaplate_store::Dataset::open(&dir).unwrap();
     assert_eq!(dataset.actuators().len(), 8);
     assert_eq!(dataset.points().len(), 6);
@@ -142,6 +145,14 @@ fn simulate_greens_writes_a_dataset_the_store_reads() {
         metaplate(&["simulate", "greens", "--scene", "homogeneous", "--grid", "3x2", "--out", dir.to_str().unwrap()]);
     assert!(!again.status.success());
     assert!(String::from_utf8(again.stderr).unwrap().contains("--force"));
+    // --cache-dir wins over the environment; --no-cache caches nowhere.
+    let (flag_cache, unused) = (root.join("flag-cache"), root.join("unused"));
+    let out = simulate_greens(&dir, &unused, &["--force", "--cache-dir", flag_cache.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(holds_entries(&flag_cache) && !holds_entries(&unused));
+    let out = simulate_greens(&dir, &unused, &["--force", "--no-cache"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!holds_entries(&unused));
 }
 
 #[test]

@@ -39,15 +39,3 @@ impl CacheArgs {
         dir
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn flags_override_the_default() {
-        let given = CacheArgs { cache_dir: Some(PathBuf::from("/given")), no_cache: false };
-        assert_eq!(given.dir(), Some(PathBuf::from("/given")));
-        assert_eq!(CacheArgs { cache_dir: None, no_cache: true }.dir(), None);
-    }
-}
