@@ -416,7 +416,7 @@ impl LabState {
         self.playbacks.retain(|s| s.playback.end_s() + tail_s >= t_first);
         for k in 0..self.playbacks.len() {
             let fresh = self.playbacks[k].rendered.as_ref().is_some_and(|r| r.run == run.id);
-            // Only the playbacks submitted during this acquisition: the ring-down of an earlier one (the previous
+            // Only the playbacks that start during this acquisition: the ring-down of an earlier one (the previous
             // unit's last sweep, still up to 1e-4 of peak when the next acquisition starts) is not carried over, so
             // that a measurement is the same whether or not the session measured something just before it (a
             // resumed run starts on a plate at rest). Recipes record each playback whole, ring-down included.

@@ -5,5 +5,6 @@
 mod chain;
 mod common;
 mod faults;
+mod serve;
 mod switches;
 mod windowed_truth;

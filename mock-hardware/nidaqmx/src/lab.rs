@@ -194,6 +194,10 @@ impl Reply {
             ("overrun", "") => Ok(Reply::Overrun),
             ("wait", ms) => Ok(Reply::Wait { ms: ms.parse().map_err(|_| invalid(format!("bad wait {ms:?}")))? }),
             ("data", "") => {
+                // What was asked, never more than a read may ask: a rogue socket cannot make this allocate more.
+                if values as u64 > MAX_READ_VALUES {
+                    return Err(invalid(format!("{values} values is over {MAX_READ_VALUES}")));
+                }
                 let mut bytes = vec![0_u8; values * 8];
                 input.read_exact(&mut bytes)?;
                 Ok(Reply::Data(

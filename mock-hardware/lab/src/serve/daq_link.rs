@@ -5,10 +5,10 @@
 //! Pacing: sample `n` of an acquisition is handed out once `n / rate / speed` has passed on the wall clock since
 //! its start, plus [`LAG`], and never while a playback is arriving (it is scheduled first). Until the
 //! acquisition's first playback has been scheduled, or [`WAIT_FOR_PLAYBACK`] has passed, nothing is handed out: that
-//! playback then sounds at the acquisition's start plus the interface's latency however long the host took to
-//! start it, as on an interface and a DAQ started together (`Timing::arrival_s`). An acquisition starts after the
-//! last playback has sounded, so an earlier acquisition's sweep (one stopped early, or that overflowed) is never
-//! heard in it.
+//! playback then sounds at the lab's time then (the acquisition's start, unless the vibrometer's link moved the
+//! lab's clock) plus the interface's latency, however long the host took to start it, as on an interface and a DAQ
+//! started together (`Timing::arrival_s`). An acquisition starts after every playback scheduled or arriving before
+//! it has sounded, so an earlier acquisition's sweep (one stopped early, or that overflowed) is not heard in it.
 
 use std::io::BufReader;
 use std::os::unix::net::{UnixListener, UnixStream};
@@ -24,13 +24,14 @@ use metaplate_core::scene::FaultKind;
 use metaplate_mock_audio::FaultWindows;
 use nidaqmx_standin::lab::{MAX_READ_VALUES, Reply, Request, read_line};
 
-use super::{Acquisition, Timing, WAIT_FOR_PLAYBACK};
+use super::{Acquisition, IDLE_POLL, LAG, Timing, WAIT_FOR_PLAYBACK};
 use crate::chain::Shared;
 use crate::mirrors::MockMirrors;
 use crate::{LabError, MockLab};
 
-/// How far behind the wall clock samples are handed out.
-const LAG: Duration = Duration::from_millis(50);
+/// How long a start waits for the previous acquisition's connection to end and an arriving playback to be
+/// scheduled.
+const HANDOVER: Duration = Duration::from_secs(2);
 
 /// Listens at `socket` (a stale socket of a rig that is gone is replaced).
 ///
@@ -139,6 +140,15 @@ impl Connection {
     }
 
     fn start(&self, rate_hz: f64) -> Reply {
+        // The previous task's connection ends a moment after its host stopped it, and a playback still arriving is
+        // scheduled first (it belongs before this acquisition): wait for both, a little.
+        let deadline = Instant::now() + HANDOVER;
+        while Instant::now() < deadline
+            && (self.timing.acquisition().is_some_and(|a| a.connection != self.id)
+                || self.timing.receiving.load(Ordering::Acquire))
+        {
+            std::thread::sleep(IDLE_POLL);
+        }
         let Ok(mut acquisition) = self.timing.acquisition.lock() else {
             return Reply::Error("the rig's acquisition lock is poisoned".into());
         };

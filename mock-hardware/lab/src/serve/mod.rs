@@ -109,6 +109,10 @@ impl ServeOptions {
 /// How long an acquisition waits for its first playback before it runs without one.
 const WAIT_FOR_PLAYBACK: Duration = Duration::from_secs(2);
 
+/// How far behind the wall clock (scaled by the speed) samples are handed out: a playback that arrives meanwhile is
+/// scheduled first.
+const LAG: Duration = Duration::from_millis(50);
+
 /// When the current acquisition started, on the wall clock and on the lab's.
 #[derive(Debug, Clone, Copy)]
 struct Acquisition {
@@ -127,7 +131,7 @@ struct Acquisition {
 struct Timing {
     speed: f64,
     acquisition: Mutex<Option<Acquisition>>,
-    /// Bytes of a playback are arriving that the lab has not scheduled yet: samples after its start must wait.
+    /// Bytes of a playback are arriving that the lab has not scheduled yet: no sample is handed out meanwhile.
     receiving: AtomicBool,
     /// The generation of the acquisition that last had a playback scheduled during it (0: none).
     played_generation: AtomicU64,
@@ -164,7 +168,9 @@ impl Timing {
     fn arrival_s(&self, lab_now_s: f64, wall: Instant) -> (f64, u64) {
         let Some(a) = self.acquisition() else { return (lab_now_s, 0) };
         let waited = wall.saturating_duration_since(a.wall_t0);
-        let arrival_s = if !self.played(&a) && waited < WAIT_FOR_PLAYBACK {
+        // Still waiting for a first playback, with the lag to spare: nothing after the lab's time has been handed out.
+        // Later, samples up to the wall clock less the lag may have been: the wall clock then says when.
+        let arrival_s = if !self.played(&a) && waited + LAG < WAIT_FOR_PLAYBACK {
             lab_now_s
         } else {
             (a.virtual_t0_s + waited.as_secs_f64() * self.speed).max(lab_now_s)
@@ -174,11 +180,16 @@ impl Timing {
         (start_s, a.generation)
     }
 
-    /// A playback of acquisition `generation` was scheduled, sounding until `until_s` (lab time).
-    fn scheduled(&self, generation: u64, until_s: f64) {
+    /// A playback of acquisition `generation` that sounds until `until_s` (lab time) is about to be scheduled:
+    /// recorded first, so that an acquisition that starts meanwhile starts after it.
+    fn will_sound(&self, generation: u64, until_s: f64) {
         if let Ok(mut sounding) = self.sounding.lock() {
-            *sounding = (generation, until_s);
+            *sounding = (generation, sounding.1.max(until_s));
         }
+    }
+
+    /// A playback of acquisition `generation` was scheduled.
+    fn scheduled(&self, generation: u64) {
         if self.acquisition().is_some_and(|a| a.generation == generation) {
             self.played_generation.store(generation, Ordering::Release);
         }

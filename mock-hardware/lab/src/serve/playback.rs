@@ -1,5 +1,6 @@
 //! The stand-in rig's audio interface: the host plays through ALSA's stock `file` PCM
-//! (`file:'DIR/play.fifo',raw`, over the `null` PCM, which takes frames as fast as they come), which writes the raw
+//! (`file:'DIR/play.fifo',raw`, over the `null` PCM, which takes frames as fast as they come; or the same behind a
+//! `plug` at the scene's other rate, defined in the rig's `asound.conf`), which writes the raw
 //! frames (FLOAT_LE, the audio backend's first choice, interleaved, the hardware file's channel count) into a FIFO
 //! the lab reads here.
 //!
@@ -61,7 +62,7 @@ pub(super) fn serve(
     let shared = lab.shared.clone();
     let clock = Arc::clone(&lab.clock);
     // A host that never pauses still has its frames scheduled, in pieces of this many bytes (10 s).
-    let piece_bytes = (frame_rate_hz * 10.0) as usize * frame_bytes;
+    let piece_bytes = ((frame_rate_hz * 10.0) as usize).max(1).saturating_mul(frame_bytes);
     std::thread::Builder::new()
         .name("stand-in-audio".into())
         .spawn(move || {
@@ -85,10 +86,15 @@ pub(super) fn serve(
                             continue;
                         }
                     }
+                    // No host has the PCM open: a partial frame of the last one's will not be completed.
+                    Ok(_) if piece.is_none() => pending.clear(),
                     Ok(_) => {}
                     Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::Interrupted) => {}
-                    // The FIFO itself failed: nothing more will come.
-                    Err(_) => break,
+                    // The FIFO itself failed: nothing more will come, and nothing is arriving.
+                    Err(_) => {
+                        timing.receiving.store(false, Ordering::Release);
+                        break;
+                    }
                 }
                 let full = pending.len() >= piece_bytes;
                 if let Some((start_s, generation)) = piece.filter(|_| full || last_byte.elapsed() >= GAP) {
@@ -103,8 +109,9 @@ pub(super) fn serve(
                     let playback =
                         Playback { start_s, frame_rate_hz, channels, samples: Arc::new(samples), underruns: 0 };
                     if playback.frames() > 0 {
+                        timing.will_sound(generation, playback.end_s());
                         shared.on_playback(&playback);
-                        timing.scheduled(generation, playback.end_s());
+                        timing.scheduled(generation);
                     }
                     piece = None;
                     timing.receiving.store(false, Ordering::Release);
