@@ -239,10 +239,8 @@ impl LabLink {
     /// # Errors
     /// Why the lab cannot be reached, or its `error` reply.
     pub fn start(socket: &Path, rate_hz: f64, inputs: &[u8]) -> Result<LabLink, String> {
+        let mut link = LabLink::connect(socket, inputs.len())?;
         let gone = |e: std::io::Error| format!("the stand-in rig at {}: {e}", socket.display());
-        let stream = UnixStream::connect(socket).map_err(gone)?;
-        stream.set_read_timeout(Some(Duration::from_secs(REPLY_TIMEOUT_S))).map_err(gone)?;
-        let mut link = LabLink { stream: BufReader::new(stream), inputs: inputs.len() };
         match link.ask(&Request::Start { rate_hz, inputs: inputs.to_vec() }, 0).map_err(gone)? {
             Reply::Ok => Ok(link),
             Reply::Error(text) => Err(format!("the stand-in rig: {text}")),
@@ -255,10 +253,15 @@ impl LabLink {
     /// # Errors
     /// Why the lab cannot be reached.
     pub fn outputs(socket: &Path) -> Result<LabLink, String> {
+        LabLink::connect(socket, 0)
+    }
+
+    /// A connection to the lab at `socket` whose `data` replies carry `inputs` values per sample.
+    fn connect(socket: &Path, inputs: usize) -> Result<LabLink, String> {
         let gone = |e: std::io::Error| format!("the stand-in rig at {}: {e}", socket.display());
         let stream = UnixStream::connect(socket).map_err(gone)?;
         stream.set_read_timeout(Some(Duration::from_secs(REPLY_TIMEOUT_S))).map_err(gone)?;
-        Ok(LabLink { stream: BufReader::new(stream), inputs: 0 })
+        Ok(LabLink { stream: BufReader::new(stream), inputs })
     }
 
     /// Tells the lab the outputs now hold `x_v` (`ao0`) and `y_v` (`ao1`).

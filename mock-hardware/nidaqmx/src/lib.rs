@@ -34,6 +34,12 @@ use std::time::{Duration, Instant};
 
 pub use model::{NiError, ReadOutcome, StandIn};
 
+/// The stand-in's file name as cargo builds it (`libnidaqmx_standin.so` on Linux): what a hardware file's
+/// `library` names, and what a stand-in rig copies into its folder.
+pub fn library_file_name() -> String {
+    format!("{}nidaqmx_standin{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX)
+}
+
 /// The process's NI-DAQmx state.
 static STATE: Mutex<StandIn> = Mutex::new(StandIn::new());
 

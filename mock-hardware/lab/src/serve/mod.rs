@@ -29,8 +29,6 @@ use crate::{LabError, MockLab};
 
 /// The FIFO the audio interface's `file` PCM writes into, in the rig's folder.
 pub const PLAYBACK_FIFO: &str = "play.fifo";
-/// The stand-in NI-DAQmx library's file name, as cargo builds it and as the rig's folder holds it.
-pub const NIDAQMX_LIBRARY: &str = "libnidaqmx_standin.so";
 /// The hardware file the rig writes in its folder.
 pub const HARDWARE_FILE: &str = "hardware.toml";
 /// The ALSA configuration the rig writes when its scene clocks the interface at another rate (`setup.
@@ -84,7 +82,8 @@ pub const GALVO_FIT: &str = "galvo-fit.toml";
 
 impl ServeOptions {
     /// Options for serving scene `scene` (a built-in name, or a scene file, named by its absolute path) at `speed`,
-    /// with the stand-in library at `nidaqmx_library` (`None`: [`NIDAQMX_LIBRARY`] beside the running program).
+    /// with the stand-in library at `nidaqmx_library` (`None`: `nidaqmx_standin::library_file_name()` beside the
+    /// running program).
     ///
     /// # Errors
     /// [`LabError::Serve`] when the running program's path cannot be found.
@@ -98,7 +97,7 @@ impl ServeOptions {
             Some(path) => path,
             None => std::env::current_exe()
                 .map_err(|e| LabError::Serve { what: format!("finding the running program: {e}") })?
-                .with_file_name(NIDAQMX_LIBRARY),
+                .with_file_name(nidaqmx_standin::library_file_name()),
         };
         let file = std::fs::canonicalize(scene).ok().filter(|path| path.is_file());
         let plate = file.map_or_else(|| scene.to_owned(), |path| path.display().to_string());
@@ -211,7 +210,7 @@ pub struct StandInRig {
     ldv: PtyServer,
     /// The Zaber stages' server, when they aim.
     stages: Option<PtyServer>,
-    _lab: Arc<MockLab>,
+    lab: MockLab,
 }
 
 impl std::fmt::Debug for StandInRig {
@@ -234,7 +233,6 @@ impl StandInRig {
         }
         std::fs::create_dir_all(dir)
             .map_err(|e| LabError::Serve { what: format!("creating {}: {e}", dir.display()) })?;
-        let lab = Arc::new(lab);
         let timing = Arc::new(Timing::new(options.speed));
         // From here on, a failure drops the rig: its threads stop and its files go.
         let mut rig = StandInRig {
@@ -243,23 +241,23 @@ impl StandInRig {
             threads: Vec::new(),
             ldv: PtyServer::spawn(Arc::clone(&lab.ldv))?,
             stages: None,
-            _lab: Arc::clone(&lab),
+            lab,
         };
         // The socket first: binding it fails while another rig serves this folder, before anything of that rig's is
         // touched (its library, mapped by its hosts, above all).
         let socket = dir.join(nidaqmx_standin::lab::SOCKET_NAME);
-        rig.threads.push(daq_link::serve(&lab, &socket, Arc::clone(&timing), Arc::clone(&rig.stop))?);
+        rig.threads.push(daq_link::serve(&rig.lab, &socket, Arc::clone(&timing), Arc::clone(&rig.stop))?);
         let library = std::fs::read(&options.nidaqmx_library).map_err(|e| LabError::Serve {
             what: format!(
                 "reading the stand-in NI-DAQmx library {} (build it with `cargo build -p metaplate-mock-nidaqmx`): {e}",
                 options.nidaqmx_library.display()
             ),
         })?;
-        write_whole(&dir.join(NIDAQMX_LIBRARY), &library)?;
-        rig.threads.push(playback::serve(&lab, &dir.join(PLAYBACK_FIFO), timing, Arc::clone(&rig.stop))?);
+        write_durably(dir, &nidaqmx_standin::library_file_name(), &library)?;
+        rig.threads.push(playback::serve(&rig.lab, &dir.join(PLAYBACK_FIFO), timing, Arc::clone(&rig.stop))?);
         let aim_section = match options.aim {
             RigAim::Stages => {
-                let (server, bridge, section) = stages::serve(&lab, Arc::clone(&rig.stop))?;
+                let (server, bridge, section) = stages::serve(&rig.lab, Arc::clone(&rig.stop))?;
                 rig.stages = Some(server);
                 rig.threads.push(bridge);
                 section
@@ -268,10 +266,11 @@ impl StandInRig {
                 "# The lab's galvo mirrors on the stand-in's outputs; teach the fit with `metaplate aim teach \
                  --hardware`.\n[aim]\nbackend = \"galvo\"\nfit = \"{GALVO_FIT}\"\nsettle_ms = 2.0\n\n[aim.outputs]\n\
                  backend = \"nidaqmx\"\ndevice = \"Dev1\"\nx_channel = \"ao0\"\ny_channel = \"ao1\"\n\
-                 library = \"{NIDAQMX_LIBRARY}\"\n"
+                 library = \"{}\"\n",
+                nidaqmx_standin::library_file_name()
             ),
         };
-        if let Some(rate_hz) = lab.scene().setup.audio_device_rate_hz {
+        if let Some(rate_hz) = rig.lab.scene().setup.audio_device_rate_hz {
             let fifo = dir.join(PLAYBACK_FIFO);
             let config = format!(
                 "# The stand-in rig's interface, clocked at {rate_hz} Hz whatever the host asks (its scene's \
@@ -280,10 +279,10 @@ impl StandInRig {
                 fifo.display().to_string(),
                 rate_hz.round()
             );
-            write_whole(&dir.join(ALSA_CONFIG), config.as_bytes())?;
+            write_durably(dir, ALSA_CONFIG, config.as_bytes())?;
         }
         // Last, and whole: a host that sees the file finds the rig serving.
-        write_whole(&rig.hardware_path(), hardware_file(&rig, &lab, options, &aim_section).as_bytes())?;
+        write_durably(dir, HARDWARE_FILE, hardware_file(&rig, options, &aim_section).as_bytes())?;
         Ok(rig)
     }
 
@@ -343,30 +342,28 @@ impl Drop for StandInRig {
         }
         // What names the rig goes first, then what serves it; the library copy too, so that nothing loads it
         // without its rig.
-        for name in [HARDWARE_FILE, ALSA_CONFIG, PLAYBACK_FIFO, nidaqmx_standin::lab::SOCKET_NAME, NIDAQMX_LIBRARY] {
+        let library = nidaqmx_standin::library_file_name();
+        for name in [HARDWARE_FILE, ALSA_CONFIG, PLAYBACK_FIFO, nidaqmx_standin::lab::SOCKET_NAME, &library] {
             let _ = std::fs::remove_file(self.dir.join(name));
         }
     }
 }
 
-/// Writes `bytes` to `path` whole: a temporary file beside it, renamed over it (a process that has the old file
-/// mapped keeps it).
+/// Writes `bytes` as `dir/name` whole and durably (the store's write: a temporary file, fsync'd, renamed over it;
+/// a host that has the old file mapped keeps it).
 ///
 /// # Errors
-/// [`LabError::Serve`] with the path and the system's reason.
-fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), LabError> {
-    let fail = |e: std::io::Error| LabError::Serve { what: format!("writing {}: {e}", path.display()) };
-    let mut temporary = path.as_os_str().to_owned();
-    temporary.push(".partial");
-    std::fs::write(&temporary, bytes).map_err(fail)?;
-    std::fs::rename(&temporary, path).map_err(fail)
+/// [`LabError::Serve`] with the store's reason.
+fn write_durably(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), LabError> {
+    metaplate_store::write_bytes(dir, name, bytes).map_err(|e| LabError::Serve { what: e.to_string() })
 }
 
 /// How long a serving thread sleeps when it has nothing to do.
 const IDLE_POLL: Duration = Duration::from_millis(1);
 
 /// `dir/hardware.toml`: the rig's instruments, its wiring, and the plate.
-fn hardware_file(rig: &StandInRig, lab: &MockLab, options: &ServeOptions, aim: &str) -> String {
+fn hardware_file(rig: &StandInRig, options: &ServeOptions, aim: &str) -> String {
+    let lab = &rig.lab;
     let w = lab.wiring();
     let list = |v: &[u32]| v.iter().map(u32::to_string).collect::<Vec<_>>().join(", ");
     let fifo = rig.dir.join(PLAYBACK_FIFO);
@@ -394,7 +391,7 @@ fn hardware_file(rig: &StandInRig, lab: &MockLab, options: &ServeOptions, aim: &
         scene = lab.scene().name,
         plate = options.plate,
         ldv = rig.ldv_port_path().display().to_string(),
-        library = NIDAQMX_LIBRARY,
+        library = nidaqmx_standin::library_file_name(),
         pcm = pcm,
         rate = w.audio_sample_rate_hz,
         channels = w.audio_channels,

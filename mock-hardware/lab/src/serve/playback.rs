@@ -17,6 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use metaplate_audio::samples::{SampleFormat, decode};
 use metaplate_core::clock::Clock;
 use metaplate_mock_audio::{Playback, PlaybackObserver};
 use rustix::fs::{FileType, Mode, OFlags};
@@ -26,9 +27,6 @@ use crate::{LabError, MockLab};
 
 /// How long without a byte ends a playback.
 const GAP: Duration = Duration::from_millis(20);
-
-/// Bytes per sample: FLOAT_LE.
-const SAMPLE_BYTES: usize = 4;
 
 /// Makes the FIFO at `fifo` and serves it.
 ///
@@ -53,7 +51,7 @@ pub(super) fn serve(
         .map_err(|e| fail("opening the FIFO", &e))?;
     let mut file = std::fs::File::from(fd);
     let channels = lab.wiring().audio_channels.max(1);
-    let frame_bytes = channels as usize * SAMPLE_BYTES;
+    let frame_bytes = channels as usize * SampleFormat::F32.bytes_per_sample();
     // The interface's own clock: the scene's setup may have left it at another rate than the host asks.
     let scene = lab.scene();
     let frame_rate_hz = scene.setup.audio_device_rate_hz.unwrap_or(scene.audio.sample_rate_hz)
@@ -99,11 +97,9 @@ pub(super) fn serve(
                 let full = pending.len() >= piece_bytes;
                 if let Some((start_s, generation)) = piece.filter(|_| full || last_byte.elapsed() >= GAP) {
                     let whole = pending.len() / frame_bytes * frame_bytes;
-                    let samples: Vec<f32> = pending[..whole]
-                        .chunks_exact(SAMPLE_BYTES)
-                        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                        .map(|v| if v.is_finite() { v } else { 0.0 })
-                        .collect();
+                    // Exact: every value decoded is an f32's.
+                    let samples: Vec<f32> =
+                        decode(&pending[..whole], SampleFormat::F32).into_iter().map(|v| v as f32).collect();
                     // A partial frame waits for the rest of it.
                     pending.drain(..whole);
                     let playback =
